@@ -1,0 +1,88 @@
+// Mass matrix: diagonal (lumped) or dense symmetric positive definite.
+#pragma once
+
+#include "types.hpp"
+
+namespace nvib {
+
+class Mass {
+ public:
+  Mass() = default;
+
+  static Mass diagonal(const Vector& m) {
+    detail::require(m.size() > 0, "mass: at least one degree of freedom is needed");
+    for (Index i = 0; i < m.size(); ++i) {
+      detail::require(std::isfinite(m[i]), "mass: entry " + std::to_string(i) + " is not finite");
+      detail::require(m[i] > 0.0, "mass: entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
+                                      ", every mass must be > 0");
+    }
+    Mass out;
+    out.diag_ = true;
+    out.d_ = m;
+    out.dinv_ = m.cwiseInverse();
+    return out;
+  }
+
+  static Mass dense(const Matrix& M) {
+    detail::require(M.rows() > 0 && M.rows() == M.cols(),
+                    "mass: a dense mass must be square, got " + std::to_string(M.rows()) + "x" +
+                        std::to_string(M.cols()));
+    detail::require(M.allFinite(), "mass: the matrix has non-finite entries");
+    const double scale = M.cwiseAbs().maxCoeff();
+    detail::require((M - M.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * scale,
+                    "mass: the dense mass matrix is not symmetric");
+    Mass out;
+    out.diag_ = false;
+    out.M_ = M;
+    out.llt_.compute(M);
+    detail::require(out.llt_.info() == Eigen::Success,
+                    "mass: the dense mass matrix is not positive definite");
+    out.d_ = M.diagonal();
+    return out;
+  }
+
+  bool is_diagonal() const { return diag_; }
+  Index size() const { return d_.size(); }
+  const Vector& diagonal_entries() const { return d_; }
+
+  Matrix matrix() const {
+    if (diag_) return d_.asDiagonal();
+    return M_;
+  }
+
+  // out = M x
+  template <class In, class Out>
+  void apply(const Eigen::MatrixBase<In>& x, Eigen::MatrixBase<Out> const& out_) const {
+    auto& out = const_cast<Eigen::MatrixBase<Out>&>(out_);
+    if (diag_)
+      out = d_.cwiseProduct(x);
+    else
+      out.noalias() = M_ * x;
+  }
+
+  // x <- M^{-1} x
+  template <class Out>
+  void solve_in_place(Eigen::MatrixBase<Out> const& x_) const {
+    auto& x = const_cast<Eigen::MatrixBase<Out>&>(x_);
+    if (diag_)
+      x.array() *= dinv_.array();
+    else
+      llt_.solveInPlace(x);
+  }
+
+  // S += c M
+  void add_to(MatRef S, double c) const {
+    if (diag_)
+      S.diagonal() += c * d_;
+    else
+      S += c * M_;
+  }
+
+ private:
+  bool diag_ = true;
+  Vector d_, dinv_;
+  Matrix M_;
+  Eigen::LLT<Matrix> llt_;
+};
+
+}  // namespace nvib

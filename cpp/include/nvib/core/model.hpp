@@ -1,0 +1,195 @@
+// Model: M a + K u + C v + f(u, v, t) = 0, where f is the user's (or the
+// effects') nonlinear force with the loads included as -P(t).
+//
+// The force is a template parameter: any callable f(u, v, t, out) with
+// Eigen::Ref arguments, called directly (inlined), never through a virtual
+// call or std::function. Optional members detected at compile time:
+//   tangent(u, v, t, K, C)   K = df/du, C = df/dv (overwrite both)
+//   has_tangent()            runtime switch (a Python model may or may not have one)
+//   uses_velocity(), uses_time(), is_linear()   flags the schemes exploit
+// Without a tangent the model differentiates f by central differences and
+// counts the extra evaluations in Stats::num_fd_force_evals.
+#pragma once
+
+#include <type_traits>
+#include <utility>
+
+#include "mass.hpp"
+#include "types.hpp"
+
+namespace nvib {
+
+// The empty force: a linear model M a + K u + C v = 0.
+struct NoForce {
+  void operator()(const CVecRef&, const CVecRef&, double, VecRef out) const { out.setZero(); }
+  void tangent(const CVecRef&, const CVecRef&, double, MatRef K, MatRef C) const {
+    K.setZero();
+    C.setZero();
+  }
+  bool uses_velocity() const { return false; }
+  bool uses_time() const { return false; }
+  bool is_linear() const { return true; }
+};
+
+namespace traits {
+template <class F, class = void>
+struct has_tangent : std::false_type {};
+template <class F>
+struct has_tangent<F, std::void_t<decltype(std::declval<F&>().tangent(
+                          std::declval<const CVecRef&>(), std::declval<const CVecRef&>(), 0.0,
+                          std::declval<MatRef>(), std::declval<MatRef>()))>> : std::true_type {};
+
+#define NVIB_OPTIONAL_FLAG(name, fallback)                                                     \
+  template <class F, class = void>                                                             \
+  struct name##_t {                                                                            \
+    static bool get(const F&) { return fallback; }                                             \
+  };                                                                                           \
+  template <class F>                                                                           \
+  struct name##_t<F, std::void_t<decltype(std::declval<const F&>().name())>> {                 \
+    static bool get(const F& f) { return static_cast<bool>(f.name()); }                        \
+  };                                                                                           \
+  template <class F>                                                                           \
+  bool name(const F& f) {                                                                      \
+    return name##_t<F>::get(f);                                                                \
+  }
+// Unknown forces are assumed to use velocity and time and to be nonlinear:
+// that is always correct, only sometimes slower.
+NVIB_OPTIONAL_FLAG(uses_velocity, true)
+NVIB_OPTIONAL_FLAG(uses_time, true)
+NVIB_OPTIONAL_FLAG(is_linear, false)
+NVIB_OPTIONAL_FLAG(has_tangent_now, has_tangent<F>::value)
+#undef NVIB_OPTIONAL_FLAG
+}  // namespace traits
+
+template <class Force = NoForce>
+class Model {
+ public:
+  using force_type = Force;
+
+  Model() = default;
+
+  // K and C may be empty (0x0) when absent.
+  Model(Mass mass, Matrix K, Matrix C, Force force = Force{})
+      : mass_(std::move(mass)), K_(std::move(K)), C_(std::move(C)), f_(std::move(force)) {
+    const Index n = mass_.size();
+    detail::require(n > 0, "mass: the model has no degree of freedom");
+    has_K_ = K_.size() > 0;
+    has_C_ = C_.size() > 0;
+    if (has_K_) {
+      detail::require(K_.rows() == n && K_.cols() == n,
+                      "K: expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
+                          "), got (" + std::to_string(K_.rows()) + ", " + std::to_string(K_.cols()) + ")");
+      detail::require(K_.allFinite(), "K: the matrix has non-finite entries");
+    }
+    if (has_C_) {
+      detail::require(C_.rows() == n && C_.cols() == n,
+                      "C: expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
+                          "), got (" + std::to_string(C_.rows()) + ", " + std::to_string(C_.cols()) + ")");
+      detail::require(C_.allFinite(), "C: the matrix has non-finite entries");
+    }
+    uses_velocity_ = has_C_ || traits::uses_velocity(f_);
+    uses_time_ = traits::uses_time(f_);
+    is_linear_ = traits::is_linear(f_);
+    fu_.resize(n);
+    fv_.resize(n);
+    fp_.resize(n);
+    fm_.resize(n);
+  }
+
+  Model(Mass mass, Force force) : Model(std::move(mass), Matrix(), Matrix(), std::move(force)) {}
+
+  Index size() const { return mass_.size(); }
+  const Mass& mass() const { return mass_; }
+  bool has_K() const { return has_K_; }
+  bool has_C() const { return has_C_; }
+  const Matrix& K() const { return K_; }
+  const Matrix& C() const { return C_; }
+  Force& nonlinear_force() { return f_; }
+  const Force& nonlinear_force() const { return f_; }
+
+  // Flags the schemes read: what is absent is not computed.
+  bool uses_velocity() const { return uses_velocity_; }
+  bool uses_time() const { return uses_time_; }
+  bool is_linear() const { return is_linear_; }
+  bool has_analytic_tangent() const { return traits::has_tangent_now(f_); }
+
+  // out = K u + C v + f(u, v, t): everything on the left of M a + ... = 0.
+  void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) {
+    ++st.num_force_evals;
+    eval_f(u, v, t, out);
+    if (has_K_) out.noalias() += K_ * u;
+    if (has_C_) out.noalias() += C_ * v;
+  }
+
+  // a = -M^{-1} (K u + C v + f(u, v, t))
+  void acceleration(const CVecRef& u, const CVecRef& v, double t, VecRef a, Stats& st) {
+    force(u, v, t, a, st);
+    a = -a;
+    mass_.solve_in_place(a);
+  }
+
+  // Kt = K + df/du, Ct = C + df/dv.  `finite_difference` forces the numerical tangent.
+  void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef Kt, MatRef Ct, Stats& st,
+               bool finite_difference = false) {
+    ++st.num_tangent_evals;
+    if (!finite_difference && has_analytic_tangent()) {
+      if constexpr (traits::has_tangent<Force>::value) f_.tangent(u, v, t, Kt, Ct);
+    } else {
+      fd_tangent(u, v, t, Kt, Ct, st);
+    }
+    if (has_K_) Kt += K_;
+    if (has_C_) Ct += C_;
+  }
+
+ private:
+  void eval_f(const CVecRef& u, const CVecRef& v, double t, VecRef out) { f_(u, v, t, out); }
+
+  // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
+  // a second-order difference); velocity columns only if f uses velocity.
+  void fd_tangent(const CVecRef& u, const CVecRef& v, double t, MatRef Kt, MatRef Ct, Stats& st) {
+    const Index n = size();
+    const double rel = std::cbrt(std::numeric_limits<double>::epsilon());
+    fu_ = u;
+    fv_ = v;
+    for (Index j = 0; j < n; ++j) {
+      const double hj = rel * std::max(std::abs(u[j]), 1.0);
+      fu_[j] = u[j] + hj;
+      eval_f(fu_, fv_, t, fp_);
+      fu_[j] = u[j] - hj;
+      eval_f(fu_, fv_, t, fm_);
+      fu_[j] = u[j];
+      Kt.col(j) = (fp_ - fm_) / (2.0 * hj);
+      st.num_fd_force_evals += 2;
+    }
+    Ct.setZero();
+    if (!traits::uses_velocity(f_)) return;
+    for (Index j = 0; j < n; ++j) {
+      const double hj = rel * std::max(std::abs(v[j]), 1.0);
+      fv_[j] = v[j] + hj;
+      eval_f(fu_, fv_, t, fp_);
+      fv_[j] = v[j] - hj;
+      eval_f(fu_, fv_, t, fm_);
+      fv_[j] = v[j];
+      Ct.col(j) = (fp_ - fm_) / (2.0 * hj);
+      st.num_fd_force_evals += 2;
+    }
+  }
+
+  Mass mass_;
+  Matrix K_, C_;
+  Force f_{};
+  bool has_K_ = false, has_C_ = false;
+  bool uses_velocity_ = false, uses_time_ = false, is_linear_ = true;
+  Vector fu_, fv_, fp_, fm_;  // finite-difference workspace
+};
+
+// Deduction helpers.
+template <class Force>
+Model<Force> make_model(Mass mass, Force force, Matrix K = Matrix(), Matrix C = Matrix()) {
+  return Model<Force>(std::move(mass), std::move(K), std::move(C), std::move(force));
+}
+inline Model<NoForce> make_linear_model(Mass mass, Matrix K, Matrix C = Matrix()) {
+  return Model<NoForce>(std::move(mass), std::move(K), std::move(C), NoForce{});
+}
+
+}  // namespace nvib

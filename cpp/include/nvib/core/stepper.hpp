@@ -1,0 +1,79 @@
+// State shared by every stepper: {t, u, v, a}, counters and the last failure.
+// A stepper owns its workspace; step() allocates nothing.
+#pragma once
+
+#include <utility>
+
+#include "model.hpp"
+#include "types.hpp"
+
+namespace nvib {
+
+// Maps a scheme's parameter struct to its stepper: each scheme header specialises it.
+template <class Scheme, class ModelT>
+struct stepper_for;
+
+template <class ModelT>
+class StepperBase {
+ public:
+  StepperBase(ModelT model, double h) : model_(std::move(model)), h_(h) {
+    detail::require(std::isfinite(h) && h > 0.0, "dt: the time step must be finite and > 0, got " + detail::fmt(h));
+    const Index n = model_.size();
+    u_.setZero(n);
+    v_.setZero(n);
+    a_.setZero(n);
+  }
+
+  double time() const { return t0_ + static_cast<double>(n_) * h_; }
+  std::int64_t step_index() const { return n_; }
+  double dt() const { return h_; }
+  Index size() const { return model_.size(); }
+  const Vector& u() const { return u_; }
+  const Vector& v() const { return v_; }
+  const Vector& a() const { return a_; }
+  const Stats& stats() const { return stats_; }
+  Stats& stats() { return stats_; }
+  const Failure& failure() const { return failure_; }
+  ModelT& model() { return model_; }
+  const ModelT& model() const { return model_; }
+
+ protected:
+  void check_initial(double t0, const Vector& u0, const Vector& v0) const {
+    const Index n = model_.size();
+    detail::require(std::isfinite(t0), "t0: the initial time must be finite");
+    detail::require(u0.size() == n, "u0: expected " + std::to_string(n) + " entries, got " + std::to_string(u0.size()));
+    detail::require(v0.size() == n, "v0: expected " + std::to_string(n) + " entries, got " + std::to_string(v0.size()));
+    detail::require(u0.allFinite(), "u0: the initial displacement has non-finite entries");
+    detail::require(v0.allFinite(), "v0: the initial velocity has non-finite entries");
+  }
+
+  // Sets {t0, u0, v0} and a0 from the equation of motion (one force evaluation).
+  void start(double t0, const Vector& u0, const Vector& v0) {
+    check_initial(t0, u0, v0);
+    t0_ = t0;
+    n_ = 0;
+    u_ = u0;
+    v_ = v0;
+    failure_ = Failure{};
+    model_.acceleration(u_, v_, t0_, a_, stats_);
+  }
+
+  Status fail(Status s, double residual_or_nan, std::string why) {
+    failure_.status = s;
+    failure_.step = n_ + 1;
+    failure_.t = t0_ + static_cast<double>(n_ + 1) * h_;
+    failure_.message = std::move(why);
+    (void)residual_or_nan;
+    return s;
+  }
+
+  ModelT model_;
+  double h_ = 0.0;
+  double t0_ = 0.0;
+  std::int64_t n_ = 0;
+  Vector u_, v_, a_;
+  Stats stats_;
+  Failure failure_;
+};
+
+}  // namespace nvib

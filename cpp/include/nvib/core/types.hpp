@@ -1,0 +1,104 @@
+// Basic types shared by every part of nvib: vectors, counters, status, errors.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace nvib {
+
+using Vector = Eigen::VectorXd;
+using Matrix = Eigen::MatrixXd;
+// Saved histories are (n_saved, n_dofs) and C-contiguous, so NumPy takes them without a copy.
+using History = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using VecRef = Eigen::Ref<Vector>;
+using CVecRef = Eigen::Ref<const Vector>;
+using MatRef = Eigen::Ref<Matrix>;
+using Index = Eigen::Index;
+
+// Counters summed over a whole solve (never reset per step).
+struct Stats {
+  std::int64_t num_steps = 0;
+  std::int64_t num_force_evals = 0;     // evaluations of F(u, v, t) asked for by the scheme
+  std::int64_t num_fd_force_evals = 0;  // extra evaluations spent on finite-difference tangents
+  std::int64_t num_tangent_evals = 0;   // tangent (K_t, C_t) evaluations, analytic or finite-difference
+  std::int64_t num_newton_iters = 0;
+  std::int64_t num_factorizations = 0;
+  std::int64_t num_linear_solves = 0;
+  std::int64_t num_expm = 0;
+  double wall_time = 0.0;  // seconds
+
+  Stats& operator+=(const Stats& o) {
+    num_steps += o.num_steps;
+    num_force_evals += o.num_force_evals;
+    num_fd_force_evals += o.num_fd_force_evals;
+    num_tangent_evals += o.num_tangent_evals;
+    num_newton_iters += o.num_newton_iters;
+    num_factorizations += o.num_factorizations;
+    num_linear_solves += o.num_linear_solves;
+    num_expm += o.num_expm;
+    wall_time += o.wall_time;
+    return *this;
+  }
+};
+
+enum class Status { success, diverged, newton_failed, singular_matrix };
+
+inline const char* to_string(Status s) {
+  switch (s) {
+    case Status::success: return "success";
+    case Status::diverged: return "diverged";
+    case Status::newton_failed: return "newton_failed";
+    case Status::singular_matrix: return "singular_matrix";
+  }
+  return "unknown";
+}
+
+// Where and why a run stopped early.
+struct Failure {
+  Status status = Status::success;
+  std::int64_t step = 0;  // index of the step that failed (1 = the first step)
+  double t = 0.0;         // time the failed step was heading for
+  Index dof = -1;         // offending DOF for divergence, -1 if not applicable
+  std::vector<double> residuals;  // Newton residual norms of the failed step
+  std::string message;
+};
+
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const Failure& f) : std::runtime_error(f.message), failure(f) {}
+  Failure failure;
+};
+class DivergenceError : public Error { using Error::Error; };
+class ConvergenceError : public Error { using Error::Error; };
+class SingularMatrixError : public Error { using Error::Error; };
+
+[[noreturn]] inline void throw_failure(const Failure& f) {
+  switch (f.status) {
+    case Status::diverged: throw DivergenceError(f);
+    case Status::newton_failed: throw ConvergenceError(f);
+    case Status::singular_matrix: throw SingularMatrixError(f);
+    default: throw Error(f);
+  }
+}
+
+namespace detail {
+inline std::string fmt(double x) {
+  std::ostringstream os;
+  os.precision(6);
+  os << x;
+  return os.str();
+}
+inline void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+inline bool finite(double x) { return std::isfinite(x); }
+}  // namespace detail
+
+}  // namespace nvib

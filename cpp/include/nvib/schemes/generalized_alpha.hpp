@@ -1,0 +1,285 @@
+// Generalized-alpha (Chung & Hulbert 1993, J. Appl. Mech. 60:371) and its
+// special cases Newmark (alpha_m = alpha_f = 0), HHT and WBZ, with Newton
+// iteration on the displacement.
+//
+// Convention (Chung-Hulbert): alpha weights the old level, x_{n+1-a} = (1-a) x_{n+1} + a x_n.
+// Newmark relations for a trial u_{n+1}:
+//   a_{n+1} = (u_{n+1} - u_n - h v_n) / (beta h^2) - (1/(2 beta) - 1) a_n
+//   v_{n+1} = v_n + h (1 - gamma) a_n + h gamma a_{n+1}
+// Residual in the alpha-point form (G = K u + C v + f(u, v, t) includes -P):
+//   r = (1-am) M a_{n+1} + am M a_n + G(u_{n+1-af}, v_{n+1-af}, t_{n+1-af})
+// Tangent: S = (1-am)/(beta h^2) M + (1-af) [gamma/(beta h) C_t + K_t] at the alpha point.
+// Why not the averaged-force form (1-af) G_{n+1} + af G_n: once Newton has
+// converged, M a_n + G_n = 0 and, for am = af, that form reduces exactly to
+// Newmark, so the paper's GaM (am = af = 1/2) would be Newmark under another
+// name. In the alpha-point form am = af = 1/2 is the implicit midpoint rule.
+// Both forms are identical for linear models.
+// The acceleration is carried in the state, never re-derived from equilibrium.
+#pragma once
+
+#include <algorithm>
+#include <string>
+
+#include "../core/newton.hpp"
+#include "../core/stepper.hpp"
+
+namespace nvib {
+
+struct GeneralizedAlpha {
+  double alpha_m = 0.5, alpha_f = 0.5, beta = 0.25, gamma = 0.5;
+  Iteration iteration = Iteration::newton;
+  NewtonOptions newton{};
+
+  // Defaults: the paper's non-dissipative member (alpha_m = alpha_f = 1/2, beta = 1/4,
+  // gamma = 1/2), which is also from_rho_inf(1).
+  explicit GeneralizedAlpha(double am = 0.5, double af = 0.5, double b = 0.25, double g = 0.5,
+                            Iteration it = Iteration::newton, NewtonOptions nw = {})
+      : alpha_m(am), alpha_f(af), beta(b), gamma(g), iteration(it), newton(nw) {
+    validate();
+  }
+
+  static GeneralizedAlpha from_rho_inf(double rho, Iteration it = Iteration::newton, NewtonOptions nw = {}) {
+    detail::require(std::isfinite(rho) && rho >= 0.0 && rho <= 1.0,
+                    "rho_inf: needs 0 <= rho_inf <= 1, got " + detail::fmt(rho));
+    const double am = (2.0 * rho - 1.0) / (rho + 1.0);
+    const double af = rho / (rho + 1.0);
+    const double g = 0.5 - am + af;
+    const double b = 0.25 * (1.0 - am + af) * (1.0 - am + af);
+    return GeneralizedAlpha(am, af, b, g, it, nw);
+  }
+  // Hilber-Hughes-Taylor (1977): their alpha in [-1/3, 0]; alpha_f = -alpha here.
+  static GeneralizedAlpha hht(double alpha, Iteration it = Iteration::newton, NewtonOptions nw = {}) {
+    detail::require(std::isfinite(alpha) && alpha >= -1.0 / 3.0 && alpha <= 0.0,
+                    "alpha: HHT needs -1/3 <= alpha <= 0 (Hilber et al. 1977 sign), got " + detail::fmt(alpha) +
+                        "; OpenSees' HHT alpha in [2/3, 1] corresponds to alpha - 1");
+    return GeneralizedAlpha(0.0, -alpha, 0.25 * (1.0 - alpha) * (1.0 - alpha), 0.5 - alpha, it, nw);
+  }
+  // Wood-Bossak-Zienkiewicz (1980): alpha in [-1, 0]; alpha_m = alpha here.
+  static GeneralizedAlpha wbz(double alpha, Iteration it = Iteration::newton, NewtonOptions nw = {}) {
+    detail::require(std::isfinite(alpha) && alpha >= -1.0 && alpha <= 0.0,
+                    "alpha: WBZ needs -1 <= alpha <= 0, got " + detail::fmt(alpha));
+    return GeneralizedAlpha(alpha, 0.0, 0.25 * (1.0 - alpha) * (1.0 - alpha), 0.5 - alpha, it, nw);
+  }
+
+  void validate() const {
+    using detail::fmt;
+    using detail::require;
+    require(std::isfinite(alpha_m) && std::isfinite(alpha_f) && std::isfinite(beta) && std::isfinite(gamma),
+            "GeneralizedAlpha: alpha_m, alpha_f, beta and gamma must be finite");
+    require(alpha_m <= alpha_f,
+            "alpha_m, alpha_f: unconditional stability needs alpha_m <= alpha_f (Chung-Hulbert 1993), got alpha_m = " +
+                fmt(alpha_m) + ", alpha_f = " + fmt(alpha_f));
+    require(alpha_f >= 0.0 && alpha_f <= 0.5,
+            "alpha_f: needs 0 <= alpha_f <= 1/2, got " + fmt(alpha_f));
+    require(alpha_m >= -1.0, "alpha_m: needs alpha_m >= -1, got " + fmt(alpha_m));
+    require(beta > 0.0, "beta: needs beta > 0 (beta = 0 is explicit; use CentralDifference), got " + fmt(beta));
+    require(beta <= 1.0, "beta: needs beta <= 1, got " + fmt(beta));
+    require(gamma >= 0.5 && gamma <= 1.5,
+            "gamma: needs 1/2 <= gamma <= 3/2 (gamma < 1/2 amplifies the response), got " + fmt(gamma));
+    require(beta >= 0.25 + 0.5 * (alpha_f - alpha_m) - 1e-15,
+            "beta: unconditional stability needs beta >= 1/4 + (alpha_f - alpha_m)/2 = " +
+                fmt(0.25 + 0.5 * (alpha_f - alpha_m)) + ", got " + fmt(beta));
+    newton.validate();
+  }
+
+  int order() const { return std::abs(gamma - (0.5 - alpha_m + alpha_f)) < 1e-12 ? 2 : 1; }
+  static bool is_explicit() { return false; }
+  std::string name() const {
+    return "GeneralizedAlpha(alpha_m=" + detail::fmt(alpha_m) + ", alpha_f=" + detail::fmt(alpha_f) +
+           ", beta=" + detail::fmt(beta) + ", gamma=" + detail::fmt(gamma) + ", iteration=" + to_string(iteration) + ")";
+  }
+};
+
+// Newmark (1959): generalized-alpha with alpha_m = alpha_f = 0.
+struct Newmark {
+  double beta = 0.25, gamma = 0.5;
+  Iteration iteration = Iteration::newton;
+  NewtonOptions newton{};
+
+  explicit Newmark(double b = 0.25, double g = 0.5, Iteration it = Iteration::newton, NewtonOptions nw = {})
+      : beta(b), gamma(g), iteration(it), newton(nw) {
+    as_generalized_alpha();  // validates
+  }
+  GeneralizedAlpha as_generalized_alpha() const {
+    detail::require(std::isfinite(beta) && beta > 0.0 && beta <= 1.0,
+                    "beta: Newmark needs 0 < beta <= 1 (beta = 0 is explicit; use CentralDifference), got " +
+                        detail::fmt(beta));
+    detail::require(std::isfinite(gamma) && gamma >= 0.5 && gamma <= 1.5,
+                    "gamma: Newmark needs 1/2 <= gamma <= 3/2 (gamma < 1/2 amplifies the response), got " +
+                        detail::fmt(gamma));
+    // Newmark is also used conditionally stable (beta < 1/4, e.g. linear acceleration);
+    // build the generalized-alpha parameters without its unconditional-stability check.
+    GeneralizedAlpha ga;  // valid defaults
+    ga.alpha_m = 0.0;
+    ga.alpha_f = 0.0;
+    ga.beta = beta;
+    ga.gamma = gamma;
+    ga.iteration = iteration;
+    ga.newton = newton;
+    ga.newton.validate();
+    return ga;
+  }
+  int order() const { return std::abs(gamma - 0.5) < 1e-12 ? 2 : 1; }
+  static bool is_explicit() { return false; }
+  std::string name() const {
+    return "Newmark(beta=" + detail::fmt(beta) + ", gamma=" + detail::fmt(gamma) + ", iteration=" +
+           to_string(iteration) + ")";
+  }
+};
+
+template <class ModelT>
+class GeneralizedAlphaStepper : public StepperBase<ModelT> {
+  using Base = StepperBase<ModelT>;
+  using Base::a_;
+  using Base::h_;
+  using Base::model_;
+  using Base::n_;
+  using Base::stats_;
+  using Base::u_;
+  using Base::v_;
+
+ public:
+  GeneralizedAlphaStepper(const GeneralizedAlpha& scheme, ModelT model, double h)
+      : Base(std::move(model), h), p_(scheme) {
+    const Index n = this->size();
+    G1_.setZero(n);
+    ua_.setZero(n);
+    va_.setZero(n);
+    u1_.setZero(n);
+    v1_.setZero(n);
+    a1_.setZero(n);
+    r_.setZero(n);
+    du_.setZero(n);
+    w_.setZero(n);
+    Kt_.setZero(n, n);
+    Ct_.setZero(n, n);
+    S_.setZero(n, n);
+    lu_ = Eigen::PartialPivLU<Matrix>(n);
+    residuals_.reserve(static_cast<size_t>(p_.newton.max_iter) + 2);
+  }
+  GeneralizedAlphaStepper(const Newmark& scheme, ModelT model, double h)
+      : GeneralizedAlphaStepper(scheme.as_generalized_alpha(), std::move(model), h) {}
+
+  void initialize(double t0, const Vector& u0, const Vector& v0) {
+    this->check_initial(t0, u0, v0);
+    this->t0_ = t0;
+    n_ = 0;
+    u_ = u0;
+    v_ = v0;
+    this->failure_ = Failure{};
+    model_.acceleration(u_, v_, t0, a_, stats_);
+    factorized_ = false;
+  }
+
+  // Newton residual norms of the last step (for the quadratic-convergence check).
+  const std::vector<double>& last_residuals() const { return residuals_; }
+  const GeneralizedAlpha& scheme() const { return p_; }
+
+  Status step() {
+    const double h = h_, beta = p_.beta, gamma = p_.gamma, am = p_.alpha_m, af = p_.alpha_f;
+    const double c0 = 1.0 / (beta * h * h), c1 = gamma / (beta * h);
+    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h;
+    const bool linear = model_.is_linear();
+    const bool fd = p_.newton.jacobian == Jacobian::finite_difference;
+    residuals_.clear();
+    du_small_ = false;
+
+    u1_ = u_;  // constant-displacement predictor (the incremental format's starting point)
+    update_kinematics(c0);
+    const double ta = t1 - af * h;
+    for (int k = 0;; ++k) {
+      // alpha point: x_{n+1-af} = (1-af) x_{n+1} + af x_n
+      ua_ = (1.0 - af) * u1_ + af * u_;
+      va_ = (1.0 - af) * v1_ + af * v_;
+      model_.force(ua_, va_, ta, G1_, stats_);
+      // r = (1-am) M a1 + am M a_n + G(alpha point)
+      model_.mass().apply(a1_, r_);
+      r_ *= (1.0 - am);
+      double fscale = r_.template lpNorm<Eigen::Infinity>();
+      if (am != 0.0) {
+        model_.mass().apply(a_, w_);
+        r_ += am * w_;
+        fscale = std::max(fscale, std::abs(am) * w_.template lpNorm<Eigen::Infinity>());
+      }
+      r_ += G1_;
+      fscale = std::max(fscale, G1_.template lpNorm<Eigen::Infinity>());
+      const double rnorm = r_.template lpNorm<Eigen::Infinity>();
+      residuals_.push_back(rnorm);
+      if (!std::isfinite(rnorm)) return this->fail(Status::diverged, rnorm, "non-finite Newton residual");
+      const double tol = p_.newton.atol + p_.newton.rtol * fscale;
+      if (k > 0 && (rnorm <= tol || du_small_)) break;
+      if (k == 0 && rnorm == 0.0) break;  // the predictor is in equilibrium to the last bit
+      if (k >= p_.newton.max_iter) return newton_failure(t1, tol);
+
+      const bool refactor = linear ? !factorized_ : (k == 0 || p_.iteration == Iteration::newton);
+      if (refactor) {
+        model_.tangent(ua_, va_, ta, Kt_, Ct_, stats_, fd);
+        S_.setZero();
+        model_.mass().add_to(S_, (1.0 - am) * c0);
+        if (model_.uses_velocity()) S_.noalias() += ((1.0 - af) * c1) * Ct_;
+        S_.noalias() += (1.0 - af) * Kt_;
+        lu_.compute(S_);
+        ++stats_.num_factorizations;
+        factorized_ = true;
+        if (!lu_ok()) return this->fail(Status::singular_matrix, rnorm, "singular iteration matrix at t = " + detail::fmt(t1));
+      }
+      du_.noalias() = lu_.solve(r_);
+      du_ = -du_;
+      ++stats_.num_linear_solves;
+      ++stats_.num_newton_iters;
+      u1_ += du_;
+      update_kinematics(c0);
+      du_small_ = du_.template lpNorm<Eigen::Infinity>() <=
+                  p_.newton.atol + 1e-3 * p_.newton.rtol * u1_.template lpNorm<Eigen::Infinity>();
+      if (linear || p_.iteration == Iteration::none) break;  // one linearised solve per step
+    }
+    u_.swap(u1_);
+    v_.swap(v1_);
+    a_.swap(a1_);
+    ++n_;
+    ++stats_.num_steps;
+    return Status::success;
+  }
+
+ private:
+  // a1, v1 from u1 by the Newmark relations.
+  void update_kinematics(double c0) {
+    const double h = h_, beta = p_.beta, gamma = p_.gamma;
+    a1_ = c0 * (u1_ - u_ - h * v_) - (0.5 / beta - 1.0) * a_;
+    v1_ = v_ + (h * (1.0 - gamma)) * a_ + (h * gamma) * a1_;
+  }
+
+  bool lu_ok() const {
+    const auto d = lu_.matrixLU().diagonal().cwiseAbs();
+    const double mx = d.maxCoeff();
+    return std::isfinite(mx) && mx > 0.0 && d.minCoeff() > 1e-14 * mx;
+  }
+
+  Status newton_failure(double t1, double tol) {
+    this->fail(Status::newton_failed, residuals_.back(),
+               "Newton did not converge in " + std::to_string(p_.newton.max_iter) + " iterations at t = " +
+                   detail::fmt(t1) + " (residual " + detail::fmt(residuals_.back()) + " > tolerance " +
+                   detail::fmt(tol) + ")");
+    this->failure_.residuals = residuals_;
+    return Status::newton_failed;
+  }
+
+  GeneralizedAlpha p_;
+  Vector G1_, ua_, va_, u1_, v1_, a1_, r_, du_, w_;
+  Matrix Kt_, Ct_, S_;
+  Eigen::PartialPivLU<Matrix> lu_;
+  bool factorized_ = false;
+  bool du_small_ = false;
+  std::vector<double> residuals_;
+};
+
+template <class ModelT>
+struct stepper_for<GeneralizedAlpha, ModelT> {
+  using type = GeneralizedAlphaStepper<ModelT>;
+};
+template <class ModelT>
+struct stepper_for<Newmark, ModelT> {
+  using type = GeneralizedAlphaStepper<ModelT>;
+};
+
+}  // namespace nvib

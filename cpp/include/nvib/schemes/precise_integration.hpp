@@ -1,0 +1,206 @@
+// Precise integration method (PIM; Zhong & Williams 1994) with a
+// Lagrange-interpolation predictor-corrector for the nonlinear force.
+//
+// State x = [u; v], x' = H x + r(t, x) with H the model's linear part about
+// u = v = 0 (constant K, C plus the tangent of the nonlinear force there) and
+// r = [0; -M^{-1}(G - K0 u - C0 v)] the nonlinear remainder and the loads.
+// Over a step, r(t_n + s) is replaced by its interpolating polynomial
+// sum_k c_k (s/h)^k and integrated exactly:
+//   x_{n+1} = T x_n + sum_k c_k k! h^{-k} int_0^h e^{H(h-s)} s^k ds,   T = e^{Hh}.
+// The moment integrals come from one exponential of the block matrix
+// h [[H, I, 0, ..], [0, 0, I, ..], ..] (Van Loan 1978): its first block row is
+// [T, h phi_1, h^2 phi_2, ...], and int_0^h e^{H(h-s)} s^k ds = k! h^{k+1} phi_{k+1}.
+// No H^{-1} is needed, so a singular linear part (a free-floating vehicle) is fine.
+//
+// order p: polynomial degree of the interpolation (p + 1 points).
+// Predictor: extrapolation through r_n, r_{n-1}, ..; corrector: interpolation
+// through r(x~_{n+1}), r_n, r_{n-1}, ..; `corrections` corrector passes; the
+// history value r_{n+1} is evaluated at the corrected state (P(EC)^k E).
+#pragma once
+
+#include <string>
+
+#include "../core/stepper.hpp"
+#include "../linalg/expm.hpp"
+
+namespace nvib {
+
+struct PreciseIntegration {
+  int squarings = 20;
+  int order = 2;
+  int corrections = 1;
+
+  explicit PreciseIntegration(int squarings_ = 20, int order_ = 2, int corrections_ = 1)
+      : squarings(squarings_), order(order_), corrections(corrections_) {
+    detail::require(squarings >= 1 && squarings <= 60,
+                    "squarings: needs 1 <= squarings <= 60, got " + std::to_string(squarings));
+    detail::require(order >= 1 && order <= 3, "order: needs 1 <= order <= 3 (the interpolation degree), got " +
+                                                  std::to_string(order));
+    detail::require(corrections >= 0 && corrections <= 10,
+                    "corrections: needs 0 <= corrections <= 10, got " + std::to_string(corrections));
+  }
+  static bool is_explicit() { return true; }
+  std::string name() const {
+    return "PreciseIntegration(squarings=" + std::to_string(squarings) + ", order=" + std::to_string(order) +
+           ", corrections=" + std::to_string(corrections) + ")";
+  }
+};
+
+namespace detail {
+// Maps values at nodes sigma_j to monomial coefficients: c = L * values.
+inline Matrix lagrange_to_monomial(const std::vector<double>& nodes) {
+  const Index m = static_cast<Index>(nodes.size());
+  Matrix V(m, m);
+  for (Index j = 0; j < m; ++j)
+    for (Index k = 0; k < m; ++k) V(j, k) = std::pow(nodes[static_cast<size_t>(j)], static_cast<double>(k));
+  return V.fullPivLu().inverse();
+}
+}  // namespace detail
+
+template <class ModelT>
+class PreciseIntegrationStepper : public StepperBase<ModelT> {
+  using Base = StepperBase<ModelT>;
+  using Base::a_;
+  using Base::h_;
+  using Base::model_;
+  using Base::n_;
+  using Base::stats_;
+  using Base::u_;
+  using Base::v_;
+
+ public:
+  PreciseIntegrationStepper(const PreciseIntegration& scheme, ModelT model, double h)
+      : Base(std::move(model), h), p_(scheme) {
+    const Index n = this->size(), N = 2 * n, q = p_.order + 1;
+    x_.setZero(N);
+    xn_.setZero(N);
+    rnew_.setZero(n);
+    R_.setZero(n, q);
+    Rc_.setZero(n, q);
+    Cc_.setZero(n, q);
+    // Interpolation matrices, transposed so that Cc = R * Lt; zero-padded to q columns.
+    for (Index m = 1; m <= q; ++m) {
+      std::vector<double> pred, corr;
+      for (Index j = 0; j < m; ++j) pred.push_back(-static_cast<double>(j));
+      corr.push_back(1.0);
+      for (Index j = 0; j + 1 < m; ++j) corr.push_back(-static_cast<double>(j));
+      Matrix Lp = Matrix::Zero(q, q), Lc = Matrix::Zero(q, q);
+      Lp.topLeftCorner(m, m) = detail::lagrange_to_monomial(pred).transpose();
+      Lc.topLeftCorner(m, m) = detail::lagrange_to_monomial(corr).transpose();
+      Lpred_.push_back(Lp);
+      Lcorr_.push_back(Lc);
+    }
+  }
+
+  void initialize(double t0, const Vector& u0, const Vector& v0) {
+    this->start(t0, u0, v0);
+    if (!ready_) build_propagators(t0);
+    x_.head(this->size()) = u_;
+    x_.tail(this->size()) = v_;
+    remainder(a_, R_.col(0));
+    nhist_ = 1;
+  }
+
+  Status step() {
+    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h_;
+    const Index q = p_.order + 1;
+    xn_ = x_;
+    // Predictor: extrapolate the history.
+    const Index mp = std::min<Index>(q, nhist_);
+    Cc_.noalias() = R_ * Lpred_[static_cast<size_t>(mp - 1)];
+    propagate();
+    for (int c = 0; c < p_.corrections; ++c) {
+      evaluate(t1);
+      // Corrector: interpolate through r(x~_{n+1}) and the history.
+      const Index mc = std::min<Index>(q, nhist_ + 1);
+      Rc_.col(0) = rnew_;
+      if (q > 1) Rc_.rightCols(q - 1) = R_.leftCols(q - 1);
+      Cc_.noalias() = Rc_ * Lcorr_[static_cast<size_t>(mc - 1)];
+      propagate();
+    }
+    evaluate(t1);
+    // Shift the history (newest first).
+    for (Index j = q - 1; j > 0; --j) R_.col(j) = R_.col(j - 1);
+    R_.col(0) = rnew_;
+    nhist_ = std::min<Index>(q, nhist_ + 1);
+    ++n_;
+    ++stats_.num_steps;
+    return Status::success;
+  }
+
+  const PreciseIntegration& scheme() const { return p_; }
+  const Matrix& transition() const { return T_; }
+
+ private:
+  void build_propagators(double t0) {
+    const Index n = this->size(), N = 2 * n, q = p_.order + 1, B = q + 1;
+    Matrix K0(n, n), C0(n, n);
+    Vector zero = Vector::Zero(n);
+    model_.tangent(zero, zero, t0, K0, C0, stats_);
+    Matrix H = Matrix::Zero(N, N);
+    H.topRightCorner(n, n).setIdentity();
+    Matrix MK = K0, MC = C0;
+    for (Index j = 0; j < n; ++j) {
+      auto ck = MK.col(j);
+      auto cc = MC.col(j);
+      model_.mass().solve_in_place(ck);
+      model_.mass().solve_in_place(cc);
+    }
+    H.bottomLeftCorner(n, n) = -MK;
+    H.bottomRightCorner(n, n) = -MC;
+    Hlo_ = H.bottomRows(n);
+    // Block matrix h [[H, I, 0, ..], [0, 0, I, ..], .., [0 .. 0]] with B = q + 1 blocks.
+    Matrix Z = Matrix::Zero(B * N, B * N);
+    Z.topLeftCorner(N, N) = h_ * H;
+    for (Index k = 0; k + 1 < B; ++k) Z.block(k * N, (k + 1) * N, N, N) = h_ * Matrix::Identity(N, N);
+    Matrix E = expm_increment(Z, p_.squarings);
+    ++stats_.num_expm;
+    T_ = E.topLeftCorner(N, N);
+    T_.diagonal().array() += 1.0;
+    W_.clear();
+    double fact = 1.0;
+    for (Index k = 0; k < q; ++k) {
+      if (k > 0) fact *= static_cast<double>(k);
+      // k! h^{-k} * (first block row, block k+1), only the velocity columns (r has a zero top half).
+      W_.push_back(fact / std::pow(h_, static_cast<double>(k)) * E.block(0, (k + 1) * N + n, N, n));
+    }
+    ready_ = true;
+  }
+
+  // x = T xn + sum_k W_k Cc(:, k)
+  void propagate() {
+    x_.noalias() = T_ * xn_;
+    for (size_t k = 0; k < W_.size(); ++k) x_.noalias() += W_[k] * Cc_.col(static_cast<Index>(k));
+  }
+
+  // Evaluates the force at x_ (time t1): sets u_, v_, a_ and the remainder rnew_.
+  void evaluate(double t1) {
+    const Index n = this->size();
+    u_ = x_.head(n);
+    v_ = x_.tail(n);
+    model_.acceleration(u_, v_, t1, a_, stats_);
+    remainder(a_, rnew_);
+  }
+
+  // r = a - Hlo x  (= -M^{-1} (G - K0 u - C0 v))
+  template <class Out>
+  void remainder(const Vector& a, Out&& out) {
+    out = a;
+    out.noalias() -= Hlo_ * x_;
+  }
+
+  PreciseIntegration p_;
+  bool ready_ = false;
+  Matrix T_, Hlo_;
+  std::vector<Matrix> W_, Lpred_, Lcorr_;
+  Vector x_, xn_, rnew_;
+  Matrix R_, Rc_, Cc_;
+  Index nhist_ = 0;
+};
+
+template <class ModelT>
+struct stepper_for<PreciseIntegration, ModelT> {
+  using type = PreciseIntegrationStepper<ModelT>;
+};
+
+}  // namespace nvib

@@ -1,0 +1,178 @@
+// The one loop shared by every scheme: step, save every k-th state, detect
+// divergence, sum the counters, call an observer (progress, interrupts).
+#pragma once
+
+#include <chrono>
+#include <limits>
+#include <utility>
+
+#include "core/stepper.hpp"
+#include "schemes/cemdts.hpp"
+#include "schemes/central_difference.hpp"
+#include "schemes/generalized_alpha.hpp"
+#include "schemes/precise_integration.hpp"
+#include "schemes/zhai.hpp"
+
+namespace nvib {
+
+struct SolveOptions {
+  double t0 = 0.0;
+  std::int64_t save_every = 1;  // save steps 0, k, 2k, ... and always the last one
+  std::vector<Index> dofs;      // DOFs to save; empty means all
+  // |u_i| beyond this bound counts as divergence (non-finite states always do).
+  double max_displacement = std::numeric_limits<double>::infinity();
+  bool throw_on_failure = true;
+  std::int64_t observe_every = 4096;  // steps between observer calls
+};
+
+struct Result {
+  Vector t;
+  History u, v, a;  // (n_saved, n_saved_dofs), row-major
+  std::vector<Index> dofs;
+  Stats stats;
+  Status status = Status::success;
+  Failure failure;
+  std::int64_t num_steps_requested = 0;
+};
+
+// Number of steps to reach t_end: t_end/dt rounded when it is an integer up
+// to round-off, else rounded up (the run then ends at the first multiple of dt past t_end).
+inline std::int64_t steps_to_reach(double t0, double t_end, double dt) {
+  detail::require(std::isfinite(t_end), "t_end: must be finite");
+  detail::require(std::isfinite(dt) && dt > 0.0, "dt: the time step must be finite and > 0, got " + detail::fmt(dt));
+  detail::require(t_end > t0, "t_end: must be > t0 (" + detail::fmt(t0) + "), got " + detail::fmt(t_end));
+  const double r = (t_end - t0) / dt;
+  detail::require(r < 9.0e15, "dt: too many steps (t_end - t0)/dt = " + detail::fmt(r));
+  const double nearest = std::round(r);
+  if (std::abs(r - nearest) <= 1e-9 * std::max(1.0, r)) return std::max<std::int64_t>(1, static_cast<std::int64_t>(nearest));
+  return static_cast<std::int64_t>(std::ceil(r));
+}
+
+struct NoObserver {
+  void operator()(std::int64_t, std::int64_t) const {}
+};
+
+template <class Stepper, class Observer = NoObserver>
+Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe = Observer{}) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  const Index n = st.size();
+  detail::require(opt.save_every >= 1, "save_every: must be >= 1, got " + std::to_string(opt.save_every));
+  detail::require(opt.observe_every >= 1, "observe_every: must be >= 1");
+  detail::require(!(opt.max_displacement <= 0.0), "max_displacement: must be > 0");
+  for (Index d : opt.dofs)
+    detail::require(d >= 0 && d < n, "dofs: index " + std::to_string(d) + " is out of range for " +
+                                         std::to_string(n) + " degrees of freedom");
+  const std::int64_t nsteps = steps_to_reach(st.time(), t_end, st.dt());
+  const std::int64_t k = opt.save_every;
+  const std::int64_t nsave = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
+  detail::require(nsave <= 2'000'000'000 / std::max<Index>(1, n),
+                  "save_every: the run would save " + std::to_string(nsave) + " states; raise save_every");
+
+  Result res;
+  res.num_steps_requested = nsteps;
+  if (opt.dofs.empty()) {
+    res.dofs.resize(static_cast<size_t>(n));
+    for (Index i = 0; i < n; ++i) res.dofs[static_cast<size_t>(i)] = i;
+  } else {
+    res.dofs = opt.dofs;
+  }
+  const Index m = static_cast<Index>(res.dofs.size());
+  res.t.resize(nsave);
+  res.u.resize(nsave, m);
+  res.v.resize(nsave, m);
+  res.a.resize(nsave, m);
+  Index row = 0;
+  auto save = [&]() {
+    res.t[row] = st.time();
+    for (Index j = 0; j < m; ++j) {
+      const Index d = res.dofs[static_cast<size_t>(j)];
+      res.u(row, j) = st.u()[d];
+      res.v(row, j) = st.v()[d];
+      res.a(row, j) = st.a()[d];
+    }
+    ++row;
+  };
+  save();
+
+  const Stats before = st.stats();
+  const double bound = opt.max_displacement;
+  for (std::int64_t i = 1; i <= nsteps; ++i) {
+    Status s = st.step();
+    if (s == Status::success) {
+      const auto& u = st.u();
+      if (!((u.array().abs() <= bound).all() && st.v().allFinite())) {
+        Failure f;
+        f.status = Status::diverged;
+        f.step = i;
+        f.t = st.time();
+        for (Index d = 0; d < n; ++d)
+          if (!(std::abs(u[d]) <= bound) || !std::isfinite(st.v()[d])) {
+            f.dof = d;
+            break;
+          }
+        f.message = "diverged at t = " + detail::fmt(f.t) + " (step " + std::to_string(i) + "): u[" +
+                    std::to_string(f.dof) + "] = " + detail::fmt(u[f.dof]) +
+                    (std::isfinite(bound) ? " beyond the bound " + detail::fmt(bound) : std::string());
+        res.failure = f;
+        s = Status::diverged;
+      }
+    } else {
+      res.failure = st.failure();
+    }
+    if (s != Status::success) {
+      res.status = s;
+      break;
+    }
+    if (i % k == 0 || i == nsteps) save();
+    if (i % opt.observe_every == 0) observe(i, nsteps);
+  }
+  if (row < nsave) {
+    res.t.conservativeResize(row);
+    res.u.conservativeResize(row, m);
+    res.v.conservativeResize(row, m);
+    res.a.conservativeResize(row, m);
+  }
+  Stats used = st.stats();
+  // Counters of this call only (the stepper's own are cumulative).
+  used.num_steps -= before.num_steps;
+  used.num_force_evals -= before.num_force_evals;
+  used.num_fd_force_evals -= before.num_fd_force_evals;
+  used.num_tangent_evals -= before.num_tangent_evals;
+  used.num_newton_iters -= before.num_newton_iters;
+  used.num_factorizations -= before.num_factorizations;
+  used.num_linear_solves -= before.num_linear_solves;
+  used.num_expm -= before.num_expm;
+  res.stats = used;
+  res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
+  if (res.status != Status::success && opt.throw_on_failure) throw_failure(res.failure);
+  return res;
+}
+
+template <class Scheme, class ModelT>
+typename stepper_for<Scheme, ModelT>::type make_stepper(const Scheme& scheme, ModelT model, double dt) {
+  return typename stepper_for<Scheme, ModelT>::type(scheme, std::move(model), dt);
+}
+
+// Integrates from (t0, u0, v0) to t_end. Counters include the start-up
+// (initial acceleration, PIM's exponential).
+template <class Scheme, class ModelT, class Observer = NoObserver>
+Result solve(const ModelT& model, const Scheme& scheme, double dt, double t_end, const Vector& u0,
+             const Vector& v0, const SolveOptions& opt = {}, Observer&& observe = Observer{}) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  steps_to_reach(opt.t0, t_end, dt);  // validate before any work
+  auto st = make_stepper(scheme, model, dt);
+  st.initialize(opt.t0, u0, v0);
+  const Stats init = st.stats();
+  SolveOptions inner = opt;
+  inner.throw_on_failure = false;
+  Result res = integrate(st, t_end, inner, std::forward<Observer>(observe));
+  const double wall = std::chrono::duration<double>(clock::now() - start).count();
+  res.stats += init;
+  res.stats.wall_time = wall;
+  if (res.status != Status::success && opt.throw_on_failure) throw_failure(res.failure);
+  return res;
+}
+
+}  // namespace nvib

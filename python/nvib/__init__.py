@@ -1,0 +1,46 @@
+"""nvib: time integration of nonlinear vibration systems M a + F(u, v, t) = P(t).
+
+Schemes: CentralDifference (leapfrog, LCDM), CEMDTS, Zhai, Newmark,
+GeneralizedAlpha, PreciseIntegration (PIM). Models: ``Model(mass, ...)`` with
+built-in effects or a Python force callable. ``solve(model, scheme, dt=, t_end=)``
+returns a Result; ``Stepper`` integrates step by step.
+"""
+
+from __future__ import annotations
+
+import os
+
+from . import exact
+from ._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
+from ._core import expm as _expm
+from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
+from ._model import EFFECT_PARAMETERS, Model
+from ._solve import Result, Stepper, solve
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CEMDTS", "CentralDifference", "ConvergenceError", "DivergenceError", "EFFECT_PARAMETERS",
+    "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Result",
+    "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "exact", "expm", "include_dir", "solve",
+]
+
+
+def expm(A, squarings: int = 20):
+    """e^A by the 2^N algorithm of the precise integration method (Zhong & Williams 1994)."""
+    import numpy as np
+
+    A = np.asarray(A, dtype=float)
+    if A.ndim != 2 or A.shape[0] != A.shape[1]:
+        raise ValueError(f"A: expected a square matrix, got shape {A.shape}")
+    return _expm(A, int(squarings))
+
+
+def include_dir() -> str:
+    """Folder of the installed C++ headers (nvib/nvib.hpp)."""
+    return os.path.join(os.path.dirname(__file__), "include")
+
+
+def cmake_dir() -> str:
+    """Folder holding nvibConfig.cmake: pass it as nvib_DIR or in CMAKE_PREFIX_PATH."""
+    return os.path.join(os.path.dirname(__file__), "share", "cmake", "nvib")

@@ -1,0 +1,167 @@
+"""solve(), the step-by-step Stepper and the Result they return."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import _checks, _core
+from ._errors import error_for
+from ._model import Model
+
+SCHEMES = (_core.CentralDifference, _core.Zhai, _core.CEMDTS, _core.Newmark, _core.GeneralizedAlpha,
+           _core.PreciseIntegration)
+
+
+class Result:
+    """A run: times ``t`` (n_saved,), histories ``u``, ``v``, ``a`` (n_saved, n_saved_dofs),
+    the saved DOF names ``dofs``, counters ``stats`` and ``status``
+    ('success', 'diverged', 'newton_failed' or 'singular_matrix')."""
+
+    def __init__(self, raw: dict, model: Model, scheme, dt: float):
+        self.t = raw["t"]
+        self.u = raw["u"]
+        self.v = raw["v"]
+        self.a = raw["a"]
+        self.dof_indices = list(raw["dofs"])
+        self.dofs = [model.dofs[i] for i in self.dof_indices]
+        self.stats = raw["stats"]
+        self.status = raw["status"]
+        self.failure = raw["failure"] if self.status != "success" else None
+        self.num_steps_requested = raw["num_steps_requested"]
+        self.scheme = scheme
+        self.dt = dt
+
+    @property
+    def success(self) -> bool:
+        return self.status == "success"
+
+    def __repr__(self) -> str:
+        return (f"Result({self.scheme!r}, status={self.status!r}, saved={len(self.t)}, "
+                f"steps={self.stats.num_steps}, wall_time={self.stats.wall_time:.3g}s)")
+
+
+def _check_scheme(scheme):
+    if not isinstance(scheme, SCHEMES):
+        names = ", ".join(s.__name__ for s in SCHEMES)
+        raise TypeError(f"scheme: expected one of {names}, got {type(scheme).__name__}")
+
+
+def _check_model(model):
+    if not isinstance(model, Model):
+        raise TypeError(f"model: expected nvib.Model, got {type(model).__name__}")
+
+
+def _dof_indices(model: Model, dofs) -> list[int]:
+    if dofs is None:
+        return []
+    if isinstance(dofs, (str, int)):
+        dofs = [dofs]
+    return [model._dof_index("dofs", d) for d in dofs]
+
+
+class Stepper:
+    """Step-by-step integration: ``st = Stepper(model, scheme, dt); st.step(); st.u``."""
+
+    def __init__(self, model: Model, scheme, dt: float, *, t0: float = 0.0, u0=None, v0=None):
+        _check_model(model)
+        _check_scheme(scheme)
+        self.model = model
+        self.scheme = scheme
+        self.dt = _checks.real("dt", dt, positive=True)
+        t0 = _checks.real("t0", t0)
+        u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
+        v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
+        self._st = _core.make_stepper(model._core, scheme, self.dt)
+        self._st.initialize(t0, u0, v0)
+
+    t = property(lambda self: self._st.t, doc="current time")
+    u = property(lambda self: self._st.u, doc="current displacement")
+    v = property(lambda self: self._st.v, doc="current velocity")
+    a = property(lambda self: self._st.a, doc="current acceleration")
+    stats = property(lambda self: self._st.stats, doc="counters since construction")
+    step_index = property(lambda self: self._st.step_index)
+    last_residuals = property(lambda self: list(self._st.last_residuals),
+                              doc="Newton residual norms of the last step (implicit schemes)")
+
+    def step(self, n: int = 1) -> None:
+        """Advance n steps; raises DivergenceError / ConvergenceError on failure."""
+        n = _checks.integer("n", n, minimum=1)
+        for _ in range(n):
+            status = self._st.step()
+            if status == "success" and not (np.all(np.isfinite(self._st.u)) and np.all(np.isfinite(self._st.v))):
+                status = "diverged"
+                failure = {"message": f"diverged at t = {self._st.t:g} (step {self._st.step_index}): non-finite state",
+                           "t": self._st.t, "step": self._st.step_index, "dof": int(np.argmax(~np.isfinite(self._st.u))),
+                           "residuals": []}
+                raise error_for(status, failure, None)
+            if status != "success":
+                raise error_for(status, self._st.failure, None)
+
+    def integrate(self, t_end: float, *, save_every: int = 1, dofs=None, throw: bool = True,
+                  max_displacement: float | None = None, progress=None) -> Result:
+        """Continue to t_end and return the saved history of this stretch."""
+        t_end = _checks.real("t_end", t_end)
+        if t_end <= self.t:
+            raise ValueError(f"t_end: must be > the current time {self.t}, got {t_end}")
+        save_every = _checks.integer("save_every", save_every, minimum=1)
+        bound = math.inf if max_displacement is None else _checks.real("max_displacement", max_displacement, positive=True)
+        if progress is not None and not callable(progress):
+            raise TypeError("progress: expected a callable progress(step, n_steps)")
+        raw = self._st.integrate(t_end, save_every, _dof_indices(self.model, dofs), bound, 4096, progress)
+        res = Result(raw, self.model, self.scheme, self.dt)
+        if throw and res.status != "success":
+            raise error_for(res.status, res.failure, res)
+        return res
+
+
+def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
+          save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
+          progress=None) -> Result:
+    """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
+
+    Saves steps 0, save_every, 2 save_every, ... and always the last one. If
+    (t_end - t0)/dt is not an integer the run ends at the first multiple of dt
+    past t_end. With ``throw=False`` a failed run returns its partial history
+    with ``status`` set instead of raising.
+    """
+    _check_model(model)
+    _check_scheme(scheme)
+    dt = _checks.real("dt", dt, positive=True)
+    t0 = _checks.real("t0", t0)
+    t_end = _checks.real("t_end", t_end)
+    if t_end <= t0:
+        raise ValueError(f"t_end: must be > t0 = {t0}, got {t_end}")
+    _checks.integer("save_every", save_every, minimum=1)
+    _core.steps_to_reach(t0, t_end, dt)
+    st = Stepper(model, scheme, dt, t0=t0, u0=u0, v0=v0)
+    init = st.stats
+    res = st.integrate(t_end, save_every=save_every, dofs=dofs, throw=False, max_displacement=max_displacement,
+                       progress=progress)
+    res.stats = _add_stats(res.stats, init)
+    if throw and res.status != "success":
+        raise error_for(res.status, res.failure, res)
+    return res
+
+
+class _SummedStats:
+    """Stats of a whole solve: the start-up (a0, PIM's exponential) plus the steps."""
+
+    _FIELDS = ("num_steps", "num_force_evals", "num_fd_force_evals", "num_tangent_evals", "num_newton_iters",
+               "num_factorizations", "num_linear_solves", "num_expm", "wall_time")
+
+    def __init__(self, **kw):
+        for k in self._FIELDS:
+            setattr(self, k, kw[k])
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self._FIELDS}
+
+    def __repr__(self) -> str:
+        return "Stats(" + ", ".join(f"{k}={getattr(self, k)!r}" for k in self._FIELDS) + ")"
+
+
+def _add_stats(run, init) -> _SummedStats:
+    a, b = run.as_dict(), init.as_dict()
+    return _SummedStats(**{k: a[k] + b[k] for k in _SummedStats._FIELDS})
