@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import special
 
 
 def linear_sdof(t, *, m: float, k: float, c: float = 0.0, x0: float = 1.0, v0: float = 0.0):
@@ -35,6 +34,8 @@ def linear_sdof(t, *, m: float, k: float, c: float = 0.0, x0: float = 1.0, v0: f
 
 def hardening(t, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: float = 1.5):
     """Displacement and velocity of m x'' + k0 (1 + a x^2) x = 0, x(0) = x0, x'(0) = 0."""
+    from scipy import special
+
     t = np.asarray(t, dtype=float)
     alpha, beta = k0 / m, k0 * a / m
     w = math.sqrt(alpha + beta * x0 * x0)
@@ -45,6 +46,8 @@ def hardening(t, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: floa
 
 def hardening_period(*, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: float = 1.5) -> float:
     """Period 4 K(m_e) / w of the hardening oscillator."""
+    from scipy import special
+
     alpha, beta = k0 / m, k0 * a / m
     w = math.sqrt(alpha + beta * x0 * x0)
     me = beta * x0 * x0 / (2.0 * w * w)

@@ -133,17 +133,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     res.v.conservativeResize(row, m);
     res.a.conservativeResize(row, m);
   }
-  Stats used = st.stats();
-  // Counters of this call only (the stepper's own are cumulative).
-  used.num_steps -= before.num_steps;
-  used.num_force_evals -= before.num_force_evals;
-  used.num_fd_force_evals -= before.num_fd_force_evals;
-  used.num_tangent_evals -= before.num_tangent_evals;
-  used.num_newton_iters -= before.num_newton_iters;
-  used.num_factorizations -= before.num_factorizations;
-  used.num_linear_solves -= before.num_linear_solves;
-  used.num_expm -= before.num_expm;
-  res.stats = used;
+  res.stats = st.stats();
+  res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
   res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
   if (res.status != Status::success && opt.throw_on_failure) throw_failure(res.failure);
   return res;

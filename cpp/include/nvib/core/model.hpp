@@ -147,30 +147,24 @@ class Model {
   // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
   // a second-order difference); velocity columns only if f uses velocity.
   void fd_tangent(const CVecRef& u, const CVecRef& v, double t, MatRef Kt, MatRef Ct, Stats& st) {
-    const Index n = size();
-    const double rel = std::cbrt(std::numeric_limits<double>::epsilon());
     fu_ = u;
     fv_ = v;
-    for (Index j = 0; j < n; ++j) {
-      const double hj = rel * std::max(std::abs(u[j]), 1.0);
-      fu_[j] = u[j] + hj;
-      eval_f(fu_, fv_, t, fp_);
-      fu_[j] = u[j] - hj;
-      eval_f(fu_, fv_, t, fm_);
-      fu_[j] = u[j];
-      Kt.col(j) = (fp_ - fm_) / (2.0 * hj);
-      st.num_fd_force_evals += 2;
-    }
+    fd_columns(fu_, t, Kt, st);
     Ct.setZero();
-    if (!traits::uses_velocity(f_)) return;
-    for (Index j = 0; j < n; ++j) {
-      const double hj = rel * std::max(std::abs(v[j]), 1.0);
-      fv_[j] = v[j] + hj;
+    if (traits::uses_velocity(f_)) fd_columns(fv_, t, Ct, st);
+  }
+
+  // J(:, j) = df/dx_j where x is fu_ or fv_ (restored on return).
+  void fd_columns(Vector& x, double t, MatRef J, Stats& st) {
+    const double rel = std::cbrt(std::numeric_limits<double>::epsilon());
+    for (Index j = 0; j < size(); ++j) {
+      const double xj = x[j], hj = rel * std::max(std::abs(xj), 1.0);
+      x[j] = xj + hj;
       eval_f(fu_, fv_, t, fp_);
-      fv_[j] = v[j] - hj;
+      x[j] = xj - hj;
       eval_f(fu_, fv_, t, fm_);
-      fv_[j] = v[j];
-      Ct.col(j) = (fp_ - fm_) / (2.0 * hj);
+      x[j] = xj;
+      J.col(j) = (fp_ - fm_) / (2.0 * hj);
       st.num_fd_force_evals += 2;
     }
   }

@@ -13,6 +13,16 @@ namespace nvib {
 template <class Scheme, class ModelT>
 struct stepper_for;
 
+// Brings the base's state into a derived stepper (a dependent base hides it).
+#define NVIB_STEPPER_STATE(Base) \
+  using Base::a_;                \
+  using Base::h_;                \
+  using Base::model_;            \
+  using Base::n_;                \
+  using Base::stats_;            \
+  using Base::u_;                \
+  using Base::v_
+
 template <class ModelT>
 class StepperBase {
  public:
@@ -56,6 +66,16 @@ class StepperBase {
     v_ = v0;
     failure_ = Failure{};
     model_.acceleration(u_, v_, t0_, a_, stats_);
+  }
+
+  // Time the step under way is heading for (computed, never accumulated).
+  double next_time() const { return t0_ + static_cast<double>(n_ + 1) * h_; }
+
+  // Bookkeeping at the end of a successful step.
+  Status advance() {
+    ++n_;
+    ++stats_.num_steps;
+    return Status::success;
   }
 
   Status fail(Status s, double residual_or_nan, std::string why) {

@@ -34,16 +34,20 @@ struct Stats {
   std::int64_t num_expm = 0;
   double wall_time = 0.0;  // seconds
 
-  Stats& operator+=(const Stats& o) {
-    num_steps += o.num_steps;
-    num_force_evals += o.num_force_evals;
-    num_fd_force_evals += o.num_fd_force_evals;
-    num_tangent_evals += o.num_tangent_evals;
-    num_newton_iters += o.num_newton_iters;
-    num_factorizations += o.num_factorizations;
-    num_linear_solves += o.num_linear_solves;
-    num_expm += o.num_expm;
-    wall_time += o.wall_time;
+  Stats& operator+=(const Stats& o) { return combine(o, 1); }
+  Stats& operator-=(const Stats& o) { return combine(o, -1); }
+
+ private:
+  Stats& combine(const Stats& o, int sign) {
+    num_steps += sign * o.num_steps;
+    num_force_evals += sign * o.num_force_evals;
+    num_fd_force_evals += sign * o.num_fd_force_evals;
+    num_tangent_evals += sign * o.num_tangent_evals;
+    num_newton_iters += sign * o.num_newton_iters;
+    num_factorizations += sign * o.num_factorizations;
+    num_linear_solves += sign * o.num_linear_solves;
+    num_expm += sign * o.num_expm;
+    wall_time += sign * o.wall_time;
     return *this;
   }
 };

@@ -32,13 +32,7 @@ struct CEMDTS {
 template <class ModelT>
 class CEMDTSStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
-  using Base::a_;
-  using Base::h_;
-  using Base::model_;
-  using Base::n_;
-  using Base::stats_;
-  using Base::u_;
-  using Base::v_;
+  NVIB_STEPPER_STATE(Base);
 
  public:
   CEMDTSStepper(const CEMDTS& scheme, ModelT model, double h) : Base(std::move(model), h), scheme_(scheme) {
@@ -53,7 +47,7 @@ class CEMDTSStepper : public StepperBase<ModelT> {
   }
 
   Status step() {
-    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h_;
+    const double t1 = this->next_time();
     const double eta = scheme_.eta, h2 = h_ * h_;
     u_ += h_ * v_ + ((0.5 + eta) * h2) * a_ - (eta * h2) * aprev_;
     if (model_.uses_velocity()) {
@@ -65,9 +59,7 @@ class CEMDTSStepper : public StepperBase<ModelT> {
     v_ += ((0.5 - eta) * h_) * anew_ + ((0.5 + 2.0 * eta) * h_) * a_ - (eta * h_) * aprev_;
     aprev_.swap(a_);  // a_{n-1} <- a_n
     a_.swap(anew_);   // a_n <- a_{n+1}
-    ++n_;
-    ++stats_.num_steps;
-    return Status::success;
+    return this->advance();
   }
 
   const CEMDTS& scheme() const { return scheme_; }

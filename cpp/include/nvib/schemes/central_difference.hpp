@@ -31,13 +31,7 @@ struct CentralDifference {
 template <class ModelT>
 class CentralDifferenceStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
-  using Base::a_;
-  using Base::h_;
-  using Base::model_;
-  using Base::n_;
-  using Base::stats_;
-  using Base::u_;
-  using Base::v_;
+  NVIB_STEPPER_STATE(Base);
 
  public:
   CentralDifferenceStepper(const CentralDifference& scheme, ModelT model, double h)
@@ -52,7 +46,7 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
   }
 
   Status step() {
-    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h_;
+    const double t1 = this->next_time();
     if (scheme_.velocity == CentralDifference::Velocity::synchronized) {
       u_ += h_ * v_ + (0.5 * h_ * h_) * a_;
       if (model_.uses_velocity()) {
@@ -70,9 +64,7 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
       model_.acceleration(u_, v_, t1, a_, stats_);
       first_ = false;
     }
-    ++n_;
-    ++stats_.num_steps;
-    return Status::success;
+    return this->advance();
   }
 
   const CentralDifference& scheme() const { return scheme_; }

@@ -130,13 +130,7 @@ struct Newmark {
 template <class ModelT>
 class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
-  using Base::a_;
-  using Base::h_;
-  using Base::model_;
-  using Base::n_;
-  using Base::stats_;
-  using Base::u_;
-  using Base::v_;
+  NVIB_STEPPER_STATE(Base);
 
  public:
   GeneralizedAlphaStepper(const GeneralizedAlpha& scheme, ModelT model, double h)
@@ -178,7 +172,7 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   Status step() {
     const double h = h_, beta = p_.beta, gamma = p_.gamma, am = p_.alpha_m, af = p_.alpha_f;
     const double c0 = 1.0 / (beta * h * h), c1 = gamma / (beta * h);
-    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h;
+    const double t1 = this->next_time();
     const bool linear = model_.is_linear();
     const bool fd = p_.newton.jacobian == Jacobian::finite_difference;
     residuals_.clear();
@@ -236,9 +230,7 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     u_.swap(u1_);
     v_.swap(v1_);
     a_.swap(a1_);
-    ++n_;
-    ++stats_.num_steps;
-    return Status::success;
+    return this->advance();
   }
 
  private:

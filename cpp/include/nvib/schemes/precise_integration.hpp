@@ -60,13 +60,7 @@ inline Matrix lagrange_to_monomial(const std::vector<double>& nodes) {
 template <class ModelT>
 class PreciseIntegrationStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
-  using Base::a_;
-  using Base::h_;
-  using Base::model_;
-  using Base::n_;
-  using Base::stats_;
-  using Base::u_;
-  using Base::v_;
+  NVIB_STEPPER_STATE(Base);
 
  public:
   PreciseIntegrationStepper(const PreciseIntegration& scheme, ModelT model, double h)
@@ -102,7 +96,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   }
 
   Status step() {
-    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h_;
+    const double t1 = this->next_time();
     const Index q = p_.order + 1;
     xn_ = x_;
     // Predictor: extrapolate the history.
@@ -123,9 +117,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     for (Index j = q - 1; j > 0; --j) R_.col(j) = R_.col(j - 1);
     R_.col(0) = rnew_;
     nhist_ = std::min<Index>(q, nhist_ + 1);
-    ++n_;
-    ++stats_.num_steps;
-    return Status::success;
+    return this->advance();
   }
 
   const PreciseIntegration& scheme() const { return p_; }

@@ -30,13 +30,7 @@ struct Zhai {
 template <class ModelT>
 class ZhaiStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
-  using Base::a_;
-  using Base::h_;
-  using Base::model_;
-  using Base::n_;
-  using Base::stats_;
-  using Base::u_;
-  using Base::v_;
+  NVIB_STEPPER_STATE(Base);
 
  public:
   ZhaiStepper(const Zhai& scheme, ModelT model, double h) : Base(std::move(model), h), scheme_(scheme) {
@@ -49,15 +43,13 @@ class ZhaiStepper : public StepperBase<ModelT> {
   }
 
   Status step() {
-    const double t1 = this->t0_ + static_cast<double>(n_ + 1) * h_;
+    const double t1 = this->next_time();
     const double psi = scheme_.psi, phi = scheme_.phi, h2 = h_ * h_;
     u_ += h_ * v_ + ((0.5 + psi) * h2) * a_ - (psi * h2) * aprev_;
     v_ += ((1.0 + phi) * h_) * a_ - (phi * h_) * aprev_;
     aprev_.swap(a_);
     model_.acceleration(u_, v_, t1, a_, stats_);
-    ++n_;
-    ++stats_.num_steps;
-    return Status::success;
+    return this->advance();
   }
 
   const Zhai& scheme() const { return scheme_; }

@@ -1,0 +1,129 @@
+// step() must not allocate: Eigen's own allocations are trapped with
+// EIGEN_RUNTIME_NO_MALLOC (its assertion made to throw), every other heap
+// allocation (std::vector, std::string) by a counting global operator new.
+#include <atomic>
+#include <new>
+#include <stdexcept>
+#include <string>
+
+#undef NDEBUG  // Eigen's malloc check is an eigen_assert
+#define EIGEN_RUNTIME_NO_MALLOC
+#define eigen_assert(x) \
+  if (!(x)) throw std::runtime_error("eigen_assert failed: " #x)
+
+#include <nvib/nvib.hpp>
+
+#include "check.hpp"
+
+static std::atomic<long> g_news{0};
+static std::atomic<bool> g_counting{false};
+
+void* operator new(std::size_t n) {
+  if (g_counting) ++g_news;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+struct Duffing {  // hardening spring + cubic damping, with an analytic tangent
+  void operator()(const nvib::CVecRef& u, const nvib::CVecRef& v, double, nvib::VecRef out) const {
+    for (nvib::Index i = 0; i < u.size(); ++i) out[i] = 100.0 * (1.0 + 30.0 * u[i] * u[i]) * u[i] + 0.1 * v[i] * v[i] * v[i];
+  }
+  void tangent(const nvib::CVecRef& u, const nvib::CVecRef& v, double, nvib::MatRef K, nvib::MatRef C) const {
+    K.setZero();
+    C.setZero();
+    for (nvib::Index i = 0; i < u.size(); ++i) {
+      K(i, i) = 100.0 * (1.0 + 90.0 * u[i] * u[i]);
+      C(i, i) = 0.3 * v[i] * v[i];
+    }
+  }
+};
+struct NoTangent {  // forces the finite-difference tangent
+  void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double t, nvib::VecRef out) const {
+    for (nvib::Index i = 0; i < u.size(); ++i) out[i] = 50.0 * std::sin(u[i]) - std::cos(t);
+  }
+};
+
+template <class Scheme, class ModelT>
+void check_no_alloc(const char* what, const Scheme& scheme, const ModelT& model) {
+  const nvib::Index n = model.size();
+  auto st = nvib::make_stepper(scheme, model, 1e-3);
+  nvib::Vector u0 = nvib::Vector::Constant(n, 0.3), v0 = nvib::Vector::Zero(n);
+  st.initialize(0.0, u0, v0);
+  st.step();  // a first step outside the guard is allowed to warm nothing up, but must not be needed
+  bool threw = false;
+  g_news = 0;
+  g_counting = true;
+  Eigen::internal::set_is_malloc_allowed(false);
+  try {
+    for (int i = 0; i < 200; ++i) st.step();
+  } catch (const std::exception& e) {
+    threw = true;
+    std::printf("%s: %s\n", what, e.what());
+  }
+  Eigen::internal::set_is_malloc_allowed(true);
+  g_counting = false;
+  if (threw || g_news != 0) std::printf("%s: allocated (eigen: %d, operator new: %ld)\n", what, threw, g_news.load());
+  CHECK(!threw);
+  CHECK(g_news == 0);
+}
+
+template <class ModelT>
+void all_schemes(const std::string& label, const ModelT& model) {
+  check_no_alloc((label + " CentralDifference").c_str(), nvib::CentralDifference(), model);
+  check_no_alloc((label + " CentralDifference(half_step)").c_str(),
+                 nvib::CentralDifference(nvib::CentralDifference::Velocity::half_step), model);
+  check_no_alloc((label + " Zhai").c_str(), nvib::Zhai(), model);
+  check_no_alloc((label + " CEMDTS").c_str(), nvib::CEMDTS(0.45), model);
+  check_no_alloc((label + " Newmark newton").c_str(), nvib::Newmark(0.25, 0.5, nvib::Iteration::newton), model);
+  check_no_alloc((label + " Newmark none").c_str(), nvib::Newmark(0.25, 0.5, nvib::Iteration::none), model);
+  check_no_alloc((label + " GeneralizedAlpha").c_str(), nvib::GeneralizedAlpha::from_rho_inf(0.8), model);
+  check_no_alloc((label + " PreciseIntegration").c_str(), nvib::PreciseIntegration(20, 2, 1), model);
+  check_no_alloc((label + " PreciseIntegration order 3").c_str(), nvib::PreciseIntegration(20, 3, 2), model);
+}
+
+int main() {
+  // The guard itself must catch an allocation, or the test proves nothing.
+  {
+    bool caught = false;
+    Eigen::internal::set_is_malloc_allowed(false);
+    try {
+      nvib::Vector tmp(64);
+      tmp.setZero();
+    } catch (const std::exception&) {
+      caught = true;
+    }
+    Eigen::internal::set_is_malloc_allowed(true);
+    CHECK(caught);
+    g_news = 0;
+    g_counting = true;
+    auto* p = new std::string(100, 'x');
+    g_counting = false;
+    CHECK(g_news > 0);
+    delete p;
+  }
+  const nvib::Index n = 12;  // above Eigen's small-size paths, so blocked LU kernels run too
+  nvib::Matrix K = nvib::Matrix::Zero(n, n), C = nvib::Matrix::Zero(n, n);
+  for (nvib::Index i = 0; i < n; ++i) {
+    K(i, i) = 2e3;
+    if (i > 0) K(i, i - 1) = K(i - 1, i) = -1e3;
+    C(i, i) = 1.0;
+  }
+  nvib::Matrix Md = nvib::Matrix::Identity(n, n) * 2.0;
+  for (nvib::Index i = 1; i < n; ++i) Md(i, i - 1) = Md(i - 1, i) = 0.5;
+
+  all_schemes("diagonal mass, functor", nvib::make_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), Duffing{}, K, C));
+  all_schemes("dense mass, functor", nvib::make_model(nvib::Mass::dense(Md), Duffing{}, K, C));
+  all_schemes("finite-difference tangent", nvib::make_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), NoTangent{}, K));
+  all_schemes("linear", nvib::make_linear_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), K, C));
+  std::vector<nvib::effects::Effect> fx;
+  for (nvib::Index i = 0; i < n; ++i) {
+    fx.push_back(nvib::effects::hardening_spring({{i, 1.0}}, 100.0, 30.0));
+    fx.push_back(nvib::effects::damper({{i, 1.0}}, 0.5));
+    if (i > 0) fx.push_back(nvib::effects::cubic_spring({{i, 1.0}, {i - 1, -1.0}}, 10.0));
+  }
+  fx.push_back(nvib::effects::harmonic_force({{0, 1.0}}, 10.0, 3.0));
+  all_schemes("effects", nvib::effects::make_effect_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), fx));
+  return nvib_test::finish("test_no_malloc");
+}

@@ -1,0 +1,155 @@
+// C++-level checks of the schemes through the public C++ API: orders on the
+// linear oscillator against its closed form, identities, failures reported
+// as the documented exceptions, validation of parameters.
+#include <nvib/nvib.hpp>
+
+#include <functional>
+#include <string>
+
+#include "check.hpp"
+
+using nvib::Index;
+using nvib::Vector;
+
+namespace {
+
+const double kM = 2.0, kK = 50.0;
+
+double exact_x(double t, double c) {  // x0 = 1, v0 = 0
+  const double w = std::sqrt(kK / kM), xi = c / (2.0 * kM * w), wd = w * std::sqrt(1.0 - xi * xi);
+  return std::exp(-xi * w * t) * (std::cos(wd * t) + xi * w / wd * std::sin(wd * t));
+}
+
+template <class Scheme>
+double max_error(const Scheme& s, double h, double c) {
+  nvib::Matrix K(1, 1), C(1, 1);
+  K << kK;
+  C << c;
+  auto model = nvib::make_linear_model(nvib::Mass::diagonal(Vector::Constant(1, kM)), K, c > 0 ? C : nvib::Matrix());
+  Vector u0 = Vector::Ones(1), v0 = Vector::Zero(1);
+  auto r = nvib::solve(model, s, h, 2.0, u0, v0);
+  double e = 0.0;
+  for (Index i = 0; i < r.t.size(); ++i) e = std::max(e, std::abs(r.u(i, 0) - exact_x(r.t[i], c)));
+  return e;
+}
+
+template <class Scheme>
+double fitted_order(const Scheme& s, double c) {
+  // least-squares slope of log e vs log h over 4 halvings
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const int m = 4;
+  for (int i = 0; i < m; ++i) {
+    const double h = 0.02 / std::pow(2.0, i);
+    const double x = std::log(h), y = std::log(max_error(s, h, c));
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  return (m * sxy - sx * sy) / (m * sxx - sx * sx);
+}
+
+struct Hardening {
+  void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::VecRef out) const {
+    out[0] = 100.0 * (1.0 + 30.0 * u[0] * u[0]) * u[0];
+  }
+  void tangent(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::MatRef K, nvib::MatRef C) const {
+    K(0, 0) = 100.0 * (1.0 + 90.0 * u[0] * u[0]);
+    C(0, 0) = 0.0;
+  }
+  bool uses_velocity() const { return false; }
+};
+
+template <class Fn>
+bool throws_invalid(Fn&& fn) {
+  try {
+    fn();
+  } catch (const std::invalid_argument&) {
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int main() {
+  for (double c : {0.0, 2.0 * 0.05 * kM * std::sqrt(kK / kM)}) {
+    const double orders[] = {
+        fitted_order(nvib::CentralDifference(), c),
+        fitted_order(nvib::Zhai(), c),
+        fitted_order(nvib::CEMDTS(0.45), c),
+        fitted_order(nvib::CEMDTS(1.0 / 12.0), c),
+        fitted_order(nvib::Newmark(), c),
+        fitted_order(nvib::Newmark(0.25, 0.5, nvib::Iteration::none), c),
+        fitted_order(nvib::GeneralizedAlpha(), c),
+        fitted_order(nvib::GeneralizedAlpha::from_rho_inf(0.6), c)};
+    for (int i = 0; i < 8; ++i) CHECK_CLOSE(orders[i], 2.0, 0.1);
+    // PIM on a linear model: the exponential is exact.
+    CHECK(max_error(nvib::PreciseIntegration(), 0.05, c) < 1e-12);
+  }
+
+  // CEMDTS(0) is LCDM; Zhai(1/2, 1/2) has LCDM's displacements.
+  {
+    auto model = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(1)), Hardening{});
+    Vector u0 = Vector::Constant(1, 1.5), v0 = Vector::Zero(1);
+    auto a = nvib::solve(model, nvib::CEMDTS(0.0), 1e-3, 0.3, u0, v0);
+    auto b = nvib::solve(model, nvib::CentralDifference(), 1e-3, 0.3, u0, v0);
+    auto z = nvib::solve(model, nvib::Zhai(), 1e-3, 0.3, u0, v0);
+    CHECK((a.u - b.u).cwiseAbs().maxCoeff() < 1e-12 * 1.5);
+    CHECK((a.v - b.v).cwiseAbs().maxCoeff() < 1e-12 * 100.0);
+    CHECK((z.u - b.u).cwiseAbs().maxCoeff() < 1e-12 * 1.5);
+    CHECK(b.stats.num_force_evals == 301);  // 300 steps + a0
+  }
+
+  // Failures reach a C++ caller as the documented exceptions.
+  {
+    nvib::Matrix K(1, 1);
+    K << 1e6;
+    auto stiff = nvib::make_linear_model(nvib::Mass::diagonal(Vector::Ones(1)), K);
+    Vector u0 = Vector::Ones(1), v0 = Vector::Zero(1);
+    bool diverged = false;
+    try {
+      nvib::solve(stiff, nvib::CentralDifference(), 3e-3, 10.0, u0, v0);  // omega h = 3 > 2
+    } catch (const nvib::DivergenceError& e) {
+      diverged = e.failure.dof == 0 && e.failure.step > 1;
+    }
+    CHECK(diverged);
+    nvib::SolveOptions opt;
+    opt.throw_on_failure = false;
+    auto r = nvib::solve(stiff, nvib::CentralDifference(), 3e-3, 10.0, u0, v0, opt);
+    CHECK(r.status == nvib::Status::diverged);
+    CHECK(r.t.size() > 1 && r.t.size() < 3335);
+    CHECK(r.u.allFinite());
+
+    auto hard = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(1)), Hardening{});
+    nvib::NewtonOptions nw;
+    nw.max_iter = 1;
+    nw.rtol = 1e-14;
+    bool newton_failed = false;
+    try {
+      nvib::solve(hard, nvib::Newmark(0.25, 0.5, nvib::Iteration::newton, nw), 0.05, 1.0, Vector::Constant(1, 1.5), v0);
+    } catch (const nvib::ConvergenceError& e) {
+      newton_failed = e.failure.residuals.size() == 2 && e.failure.step == 1;
+    }
+    CHECK(newton_failed);
+  }
+
+  // Validation names the parameter and never clamps.
+  CHECK(throws_invalid([] { nvib::CEMDTS(-0.1); }));
+  CHECK(throws_invalid([] { nvib::Zhai(0.5, 1.5); }));
+  CHECK(throws_invalid([] { nvib::Newmark(0.0, 0.5); }));
+  CHECK(throws_invalid([] { nvib::Newmark(0.25, 0.4); }));
+  CHECK(throws_invalid([] { nvib::GeneralizedAlpha(0.6, 0.5); }));
+  CHECK(throws_invalid([] { nvib::GeneralizedAlpha::from_rho_inf(1.5); }));
+  CHECK(throws_invalid([] { nvib::PreciseIntegration(0); }));
+  CHECK(throws_invalid([] { nvib::PreciseIntegration(20, 4); }));
+  CHECK(throws_invalid([] { nvib::Mass::diagonal(Vector::Constant(2, -1.0)); }));
+  CHECK(throws_invalid([] {
+    nvib::Matrix M(2, 2);
+    M << 1, 2, 2, 1;  // symmetric, indefinite
+    nvib::Mass::dense(M);
+  }));
+  CHECK(nvib::steps_to_reach(0.0, 0.3, 1e-3) == 300);
+  CHECK(nvib::steps_to_reach(0.0, 1.0, 0.3) == 4);
+  return nvib_test::finish("test_schemes");
+}
