@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
 #include <cstring>
 #include <memory>
 
@@ -175,10 +176,20 @@ struct AnyStepper {
 };
 
 // Called every few thousand steps: lets Ctrl-C through and reports progress.
+// Taking the GIL back costs up to the interpreter's switch interval when
+// another Python thread is busy, so after the first call it is done at most
+// every 0.1 s.
 struct PyObserver {
   py::object callback;
   bool gil_released;
-  void operator()(std::int64_t i, std::int64_t n) const {
+  bool first = true;
+  std::chrono::steady_clock::time_point last{};
+
+  void operator()(std::int64_t i, std::int64_t n) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!first && now - last < std::chrono::milliseconds(100)) return;
+    first = false;
+    last = now;
     auto body = [&]() {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
       if (!callback.is_none()) callback(i, n);

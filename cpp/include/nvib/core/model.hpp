@@ -33,9 +33,9 @@ struct NoForce {
 
 namespace traits {
 template <class F, class = void>
-struct has_tangent : std::false_type {};
+struct has_tangent_method : std::false_type {};
 template <class F>
-struct has_tangent<F, std::void_t<decltype(std::declval<F&>().tangent(
+struct has_tangent_method<F, std::void_t<decltype(std::declval<F&>().tangent(
                           std::declval<const CVecRef&>(), std::declval<const CVecRef&>(), 0.0,
                           std::declval<MatRef>(), std::declval<MatRef>()))>> : std::true_type {};
 
@@ -57,7 +57,7 @@ struct has_tangent<F, std::void_t<decltype(std::declval<F&>().tangent(
 NVIB_OPTIONAL_FLAG(uses_velocity, true)
 NVIB_OPTIONAL_FLAG(uses_time, true)
 NVIB_OPTIONAL_FLAG(is_linear, false)
-NVIB_OPTIONAL_FLAG(has_tangent_now, has_tangent<F>::value)
+NVIB_OPTIONAL_FLAG(has_tangent, has_tangent_method<F>::value)
 #undef NVIB_OPTIONAL_FLAG
 }  // namespace traits
 
@@ -111,7 +111,7 @@ class Model {
   bool uses_velocity() const { return uses_velocity_; }
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return is_linear_; }
-  bool has_analytic_tangent() const { return traits::has_tangent_now(f_); }
+  bool has_analytic_tangent() const { return traits::has_tangent_method<Force>::value && traits::has_tangent(f_); }
 
   // out = K u + C v + f(u, v, t): everything on the left of M a + ... = 0.
   void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) {
@@ -133,7 +133,7 @@ class Model {
                bool finite_difference = false) {
     ++st.num_tangent_evals;
     if (!finite_difference && has_analytic_tangent()) {
-      if constexpr (traits::has_tangent<Force>::value) f_.tangent(u, v, t, Kt, Ct);
+      if constexpr (traits::has_tangent_method<Force>::value) f_.tangent(u, v, t, Kt, Ct);
     } else {
       fd_tangent(u, v, t, Kt, Ct, st);
     }

@@ -5,9 +5,10 @@
 //   v*      = v_n + h a_n                (predictor, only if forces use velocity)
 //   a_{n+1} = a(u_{n+1}, v*, t_{n+1})
 //   v_{n+1} = v_n + h/2 (a_n + a_{n+1})
-// velocity = half_step: the classic leapfrog that carries v_{n+1/2} = v_{n-1/2} + h a_n,
-// uses it in velocity-dependent forces and reports it as the velocity at t_{n+1}.
-// Both give the same displacements for velocity-independent forces.
+// velocity = half_step: the classic leapfrog that carries v_{n+1/2} = v_{n-1/2} + h a_n
+// and reports it as the velocity at t_{n+1}. Velocity-dependent forces get
+// v_{n+1/2} + h/2 a_n: the lagged v_{n+1/2} itself would make the scheme first
+// order with damping. Both variants give the same displacements.
 #pragma once
 
 #include <string>
@@ -61,7 +62,12 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
       // v_ holds v_{n-1/2} (v_0 before the first kick, which is a half kick).
       v_ += ((first_ ? 0.5 : 1.0) * h_) * a_;
       u_ += h_ * v_;
-      model_.acceleration(u_, v_, t1, a_, stats_);
+      if (model_.uses_velocity()) {
+        vstar_ = v_ + (0.5 * h_) * a_;  // = v_n + h a_n, the synchronized predictor
+        model_.acceleration(u_, vstar_, t1, a_, stats_);
+      } else {
+        model_.acceleration(u_, v_, t1, a_, stats_);
+      }
       first_ = false;
     }
     return this->advance();
