@@ -203,10 +203,15 @@ struct PyObserver {
   }
 };
 
+template <class S, class = void>
+struct has_residuals : std::false_type {};
+template <class S>
+struct has_residuals<S, std::void_t<decltype(std::declval<const S&>().last_residuals())>> : std::true_type {};
+
 template <class S>
 struct StepperImpl final : AnyStepper {
   template <class Scheme, class M>
-  StepperImpl(const Scheme& scheme, const M& model, double dt) : s(scheme, model, dt) {}
+  StepperImpl(const Scheme& scheme, const M& model, double dt) : s(scheme, model, dt), name(scheme.name()) {}
   // A model with Python callables keeps the GIL; a C++-only model releases it.
   static constexpr bool releases_gil = !std::is_same_v<typename std::decay_t<decltype(std::declval<S&>().model())>, CallableModel>;
 
@@ -221,10 +226,9 @@ struct StepperImpl final : AnyStepper {
   const Vector& a() const override { return s.a(); }
   Stats stats() const override { return s.stats(); }
   Failure failure() const override { return s.failure(); }
-  std::string scheme_name() const override { return s.scheme().name(); }
+  std::string scheme_name() const override { return name; }
   std::vector<double> last_residuals() const override {
-    if constexpr (std::is_same_v<S, GeneralizedAlphaStepper<CallableModel>> ||
-                  std::is_same_v<S, GeneralizedAlphaStepper<EffectModel>>)
+    if constexpr (has_residuals<S>::value)
       return s.last_residuals();
     else
       return {};
@@ -239,6 +243,7 @@ struct StepperImpl final : AnyStepper {
     }
   }
   S s;
+  std::string name;
 };
 
 template <class M, class Scheme>

@@ -10,6 +10,7 @@
 #include "schemes/cemdts.hpp"
 #include "schemes/central_difference.hpp"
 #include "schemes/generalized_alpha.hpp"
+#include "schemes/newmark.hpp"
 #include "schemes/precise_integration.hpp"
 #include "schemes/zhai.hpp"
 

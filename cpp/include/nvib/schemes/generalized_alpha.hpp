@@ -1,6 +1,6 @@
 // Generalized-alpha (Chung & Hulbert 1993, J. Appl. Mech. 60:371) and its
-// special cases Newmark (alpha_m = alpha_f = 0), HHT and WBZ, with Newton
-// iteration on the displacement.
+// special cases HHT and WBZ (Newmark, alpha_m = alpha_f = 0, is in newmark.hpp),
+// with Newton iteration on the displacement.
 //
 // Convention (Chung-Hulbert): alpha weights the old level, x_{n+1-a} = (1-a) x_{n+1} + a x_n.
 // Newmark relations for a trial u_{n+1}:
@@ -90,43 +90,6 @@ struct GeneralizedAlpha {
   }
 };
 
-// Newmark (1959): generalized-alpha with alpha_m = alpha_f = 0.
-struct Newmark {
-  double beta = 0.25, gamma = 0.5;
-  Iteration iteration = Iteration::newton;
-  NewtonOptions newton{};
-
-  explicit Newmark(double b = 0.25, double g = 0.5, Iteration it = Iteration::newton, NewtonOptions nw = {})
-      : beta(b), gamma(g), iteration(it), newton(nw) {
-    as_generalized_alpha();  // validates
-  }
-  GeneralizedAlpha as_generalized_alpha() const {
-    detail::require(std::isfinite(beta) && beta > 0.0 && beta <= 1.0,
-                    "beta: Newmark needs 0 < beta <= 1 (beta = 0 is explicit; use CentralDifference), got " +
-                        detail::fmt(beta));
-    detail::require(std::isfinite(gamma) && gamma >= 0.5 && gamma <= 1.5,
-                    "gamma: Newmark needs 1/2 <= gamma <= 3/2 (gamma < 1/2 amplifies the response), got " +
-                        detail::fmt(gamma));
-    // Newmark is also used conditionally stable (beta < 1/4, e.g. linear acceleration);
-    // build the generalized-alpha parameters without its unconditional-stability check.
-    GeneralizedAlpha ga;  // valid defaults
-    ga.alpha_m = 0.0;
-    ga.alpha_f = 0.0;
-    ga.beta = beta;
-    ga.gamma = gamma;
-    ga.iteration = iteration;
-    ga.newton = newton;
-    ga.newton.validate();
-    return ga;
-  }
-  int order() const { return std::abs(gamma - 0.5) < 1e-12 ? 2 : 1; }
-  static bool is_explicit() { return false; }
-  std::string name() const {
-    return "Newmark(beta=" + detail::fmt(beta) + ", gamma=" + detail::fmt(gamma) + ", iteration=" +
-           to_string(iteration) + ")";
-  }
-};
-
 template <class ModelT>
 class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
@@ -151,8 +114,6 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     lu_ = Eigen::PartialPivLU<Matrix>(n);
     residuals_.reserve(static_cast<size_t>(p_.newton.max_iter) + 2);
   }
-  GeneralizedAlphaStepper(const Newmark& scheme, ModelT model, double h)
-      : GeneralizedAlphaStepper(scheme.as_generalized_alpha(), std::move(model), h) {}
 
   void initialize(double t0, const Vector& u0, const Vector& v0) {
     this->check_initial(t0, u0, v0);
@@ -267,10 +228,6 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
 
 template <class ModelT>
 struct stepper_for<GeneralizedAlpha, ModelT> {
-  using type = GeneralizedAlphaStepper<ModelT>;
-};
-template <class ModelT>
-struct stepper_for<Newmark, ModelT> {
   using type = GeneralizedAlphaStepper<ModelT>;
 };
 
