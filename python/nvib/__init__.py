@@ -15,14 +15,16 @@ from ._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, Precise
 from ._core import expm as _expm
 from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
 from ._model import EFFECT_PARAMETERS, Model
-from ._solve import Result, Stepper, solve
+from ._scenes import SceneError, load_scene, scene_names
+from ._solve import Energy, Result, Stepper, solve
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "CEMDTS", "CentralDifference", "ConvergenceError", "DivergenceError", "EFFECT_PARAMETERS",
+    "CEMDTS", "CentralDifference", "ConvergenceError", "DivergenceError", "EFFECT_PARAMETERS", "Energy",
     "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Result",
-    "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "exact", "expm", "include_dir", "solve",
+    "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "exact", "expm", "include_dir",
+    "load_scene", "scene_names", "solve",
 ]
 
 

@@ -9,26 +9,73 @@ import numpy as np
 from . import _checks, _core
 
 # Parameters of each built-in effect type: (required, optional-with-default).
-EFFECT_PARAMETERS: dict[str, tuple[tuple[str, ...], dict[str, float]]] = {
+# `hertz_contact.irregularity` and `ground_acceleration.signal` are signals
+# (see _signal); every effect may carry a `name` and a free-text `note`.
+EFFECT_PARAMETERS: dict[str, tuple[tuple[str, ...], dict[str, object]]] = {
     "spring": (("k",), {}),
     "damper": (("c",), {}),
     "hardening_spring": (("k0", "a"), {}),
     "cubic_spring": (("k3",), {}),
+    "power_damper": (("c", "p"), {}),
     "pendulum_gravity": (("m", "g", "l"), {}),
+    "hertz_contact": (("G",), {"contacts": 1.0, "irregularity": None}),
     "constant_force": (("value",), {}),
     "harmonic_force": (("amplitude", "omega"), {"phase": 0.0}),
+    "ground_acceleration": (("signal",), {}),
 }
+_COMMON_KEYS = ("type", "measure", "name", "note")
+_SIGNAL_KEYS = {"sine": (("amplitude", "omega"), {"phase": 0.0}), "table": (("t", "values"), {})}
 
 
 def _effect_params(kind: str, p: dict) -> tuple[float, float, float]:
     if kind == "hardening_spring":
         return p["k0"], p["a"], 0.0
+    if kind == "power_damper":
+        return p["c"], p["p"], 0.0
     if kind == "pendulum_gravity":
         return p["m"] * p["g"] * p["l"], 0.0, 0.0
     if kind == "harmonic_force":
         return p["amplitude"], p["omega"], p["phase"]
+    if kind == "hertz_contact":
+        return p["G"], p["contacts"], 0.0
+    if kind == "ground_acceleration":
+        return 0.0, 0.0, 0.0
     (only,) = EFFECT_PARAMETERS[kind][0]
     return p[only], 0.0, 0.0
+
+
+def _signal(where: str, spec) -> dict:
+    """A signal: {kind = "sine", amplitude, omega, phase = 0} or {kind = "table", t = [...], values = [...]}."""
+    if not isinstance(spec, dict):
+        raise TypeError(f"{where}: expected a table with 'kind' = 'sine' or 'table', got {type(spec).__name__}")
+    kind = spec.get("kind")
+    if kind not in _SIGNAL_KEYS:
+        raise ValueError(f"{where}.kind: expected 'sine' or 'table', got {kind!r}")
+    required, optional = _SIGNAL_KEYS[kind]
+    for key in spec:
+        if key != "kind" and key not in required and key not in optional:
+            raise ValueError(f"{where}.{key}: unknown key for a {kind} signal (expected {', '.join(required + tuple(optional))})")
+    for key in required:
+        if key not in spec:
+            raise ValueError(f"{where}.{key}: missing")
+    out = {"signal": kind}
+    if kind == "sine":
+        out["amplitude"] = _checks.real(f"{where}.amplitude", spec["amplitude"])
+        out["omega"] = _checks.real(f"{where}.omega", spec["omega"])
+        out["phase"] = _checks.real(f"{where}.phase", spec.get("phase", 0.0))
+    else:
+        t = np.asarray(spec["t"], dtype=float)
+        y = np.asarray(spec["values"], dtype=float)
+        if t.ndim != 1 or t.size < 2:
+            raise ValueError(f"{where}.t: expected a list of at least two times")
+        if y.shape != t.shape:
+            raise ValueError(f"{where}.values: expected {t.size} values (as many as t), got {y.size}")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+            raise ValueError(f"{where}: the table contains NaN or Inf")
+        if np.any(np.diff(t) <= 0):
+            raise ValueError(f"{where}.t: times must increase strictly")
+        out["t"], out["values"] = t.tolist(), y.tolist()
+    return out
 
 
 class Model:
@@ -53,7 +100,7 @@ class Model:
     """
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
-                 u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True):
+                 u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
         m = np.asarray(mass, dtype=float) if not isinstance(mass, numbers.Real) else np.asarray([mass], dtype=float)
         if m.ndim not in (1, 2):
             raise ValueError(f"mass: expected a 1-D array (diagonal) or a 2-D matrix, got {m.ndim} dimensions")
@@ -83,10 +130,23 @@ class Model:
             raise ValueError("effects, force: give either built-in effects or a force callable, not both")
         self.force = force
         self.tangent = tangent
+        self.name = str(name)
         self.effects = None
+        self.without = tuple(without)
         if effects is not None:
-            self.effects = [self._effect(i, e) for i, e in enumerate(effects)]
+            effects = list(effects)
+            known = {e.get("name") for e in effects if isinstance(e, dict)} | {
+                e.get("type") for e in effects if isinstance(e, dict)}
+            for w in self.without:
+                if w not in known:
+                    raise ValueError(f"without: no effect named or typed {w!r} in this model "
+                                     f"(names: {', '.join(sorted(str(k) for k in known if k))})")
+            kept = [(i, e) for i, e in enumerate(effects)
+                    if not (isinstance(e, dict) and (e.get("name") in self.without or e.get("type") in self.without))]
+            self.effects = [self._effect(i, e) for i, e in kept]
             self._core = _core.EffectModel(m, self.effects, Km, Cm)
+        elif self.without:
+            raise ValueError("without: only a model of declared effects can leave effects out")
         else:
             self._core = _core.CallableModel(m, Km, Cm, force, tangent, bool(uses_velocity), bool(uses_time))
 
@@ -106,25 +166,39 @@ class Model:
         kind = spec.get("type")
         if kind not in EFFECT_PARAMETERS:
             raise ValueError(f"{where}.type: unknown effect type {kind!r} (known: {', '.join(EFFECT_PARAMETERS)})")
-        if "measure" not in spec:
+        if "measure" in spec:
+            measure = spec["measure"]
+            if not isinstance(measure, dict) or not measure:
+                raise ValueError(f"{where}.measure: expected a non-empty mapping DOF -> coefficient")
+        elif kind == "ground_acceleration":
+            measure = {d: 1.0 for d in self.dofs}  # every DOF moves with the ground
+        else:
             raise ValueError(f"{where}.measure: missing")
-        measure = spec["measure"]
-        if not isinstance(measure, dict) or not measure:
-            raise ValueError(f"{where}.measure: expected a non-empty mapping DOF -> coefficient")
         index = [self._dof_index(f"{where}.measure", k) for k in measure]
         coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
         required, optional = EFFECT_PARAMETERS[kind]
         for key in spec:
-            if key not in ("type", "measure", "name") and key not in required and key not in optional:
-                raise ValueError(f"{where}.{key}: unknown parameter for {kind} (expected {', '.join(required + tuple(optional))})")
-        params = dict(optional)
+            if key not in _COMMON_KEYS and key not in required and key not in optional:
+                raise ValueError(f"{where}.{key}: unknown parameter of {kind} (expected {', '.join(required + tuple(optional))})")
         for key in required:
             if key not in spec:
                 raise ValueError(f"{where}.{key}: missing parameter of {kind}")
+        params = dict(optional)
+        signal: dict = {}
         for key in list(required) + list(optional):
-            if key in spec:
+            if key not in spec:
+                continue
+            if key in ("signal", "irregularity"):
+                signal = _signal(f"{where}.{key}", spec[key])
+            else:
                 params[key] = _checks.real(f"{where}.{key}", spec[key])
-        return _core.Effect(kind, index, coef, *_effect_params(kind, params))
+        name = spec.get("name", "")
+        if not isinstance(name, str):
+            raise TypeError(f"{where}.name: expected a string")
+        try:
+            return _core.Effect(kind, index, coef, *_effect_params(kind, params), name=name, **signal)
+        except ValueError as exc:
+            raise ValueError(f"{where}: {exc}") from None
 
     @property
     def uses_velocity(self) -> bool:
@@ -146,6 +220,46 @@ class Model:
         """K u + C v + F(u, v, t): everything on the left of M a + ... = 0."""
         return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), float(t))
 
-    def __repr__(self) -> str:
-        kind = f"{len(self.effects)} effects" if self.effects is not None else ("force callable" if self.force else "linear")
-        return f"Model(n={self.n}, {kind}, uses_velocity={self.uses_velocity}, uses_time={self.uses_time}, is_linear={self.is_linear})"
+    def tangent_matrices(self, u, v, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(K_t, C_t): derivatives of K u + C v + F(u, v, t) with respect to u and v."""
+        return self._core.tangent(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), float(t))
+
+    def linearized_frequencies(self, u=None) -> np.ndarray:
+        """Circular frequencies [rad/s] of the undamped model linearised at u (default: zero), ascending."""
+        from scipy import linalg
+
+        u = np.zeros(self.n) if u is None else _checks.vector("u", u, self.n)
+        K, _ = self.tangent_matrices(u, np.zeros(self.n), 0.0)
+        w2 = linalg.eigh(0.5 * (K + K.T), self.mass_matrix, eigvals_only=True)
+        return np.sqrt(np.clip(w2, 0.0, None))
+
+    def static_equilibrium(self, t: float = 0.0, u_guess=None, *, rtol: float = 1e-12, max_iter: int = 200) -> np.ndarray:
+        """Displacement where K u + F(u, 0, t) = 0 (the constant loads balanced), by Newton's method.
+
+        Where the tangent stiffness is singular (a body held only by a contact
+        that is not yet closed, a free-floating vehicle), the step is
+        regularised with a mass-proportional term, like an implicit dynamic
+        step, until the tangent becomes regular.
+        """
+        u = np.zeros(self.n) if u_guess is None else _checks.vector("u_guess", u_guess, self.n).copy()
+        v = np.zeros(self.n)
+        mdiag = np.diag(self.mass_matrix)
+        scale = None
+        for _ in range(max_iter):
+            r = self.evaluate_force(u, v, t)
+            K, _ = self.tangent_matrices(u, v, t)
+            if scale is None:
+                scale = max(np.max(np.abs(r)), 1e-300)
+            if np.linalg.cond(K) < 1e13:
+                du = np.linalg.solve(K, -r)
+            else:
+                mu = 1e-3 * max(np.max(np.abs(np.diag(K)) / mdiag), 1e-300)
+                du = np.linalg.solve(K + mu * np.diag(mdiag), -r)
+            u += du
+            if not np.all(np.isfinite(u)):
+                break
+            if np.max(np.abs(du)) <= rtol * max(np.max(np.abs(u)), 1e-300):
+                r = self.evaluate_force(u, v, t)
+                if np.max(np.abs(r)) <= 1e-8 * scale:
+                    return u
+        raise ValueError(f"initial: static_equilibrium did not converge in {max_iter} Newton iterations")

@@ -14,6 +14,33 @@ SCHEMES = (_core.CentralDifference, _core.Zhai, _core.CEMDTS, _core.Newmark, _co
            _core.PreciseIntegration)
 
 
+class Energy:
+    """Energy accounting at the saved states: kinetic, potential (conservative
+    effects and K), work_in (work done by loads and moving supports since t0),
+    dissipated (by dampers since t0) and balance_error =
+    kinetic + potential + dissipated - work_in - (kinetic + potential at t0)."""
+
+    def __init__(self, table: np.ndarray):
+        self.kinetic = table[:, 0]
+        self.potential = table[:, 1]
+        self.work_in = table[:, 2]
+        self.dissipated = table[:, 3]
+        self.balance_error = table[:, 4]
+
+    @property
+    def total(self) -> np.ndarray:
+        return self.kinetic + self.potential
+
+    def relative_balance_error(self) -> float:
+        """max |balance error| over the largest energy magnitude seen in the run."""
+        scale = np.max(np.abs(self.kinetic) + np.abs(self.potential) + np.abs(self.work_in) + np.abs(self.dissipated))
+        return float(np.max(np.abs(self.balance_error)) / scale) if scale > 0 else 0.0
+
+    def as_dict(self) -> dict:
+        return {"kinetic": self.kinetic, "potential": self.potential, "work_in": self.work_in,
+                "dissipated": self.dissipated, "balance_error": self.balance_error}
+
+
 class Result:
     """A run: times ``t`` (n_saved,), histories ``u``, ``v``, ``a`` (n_saved, n_saved_dofs),
     the saved DOF names ``dofs``, counters ``stats`` and ``status``
@@ -30,6 +57,7 @@ class Result:
         self.status = raw["status"]
         self.failure = raw["failure"] if self.status != "success" else None
         self.num_steps_requested = raw["num_steps_requested"]
+        self.energy = Energy(raw["energy"]) if "energy" in raw else None
         self.scheme = scheme
         self.dt = dt
 
@@ -100,7 +128,7 @@ class Stepper:
                 raise error_for(status, self._st.failure, None)
 
     def integrate(self, t_end: float, *, save_every: int = 1, dofs=None, throw: bool = True,
-                  max_displacement: float | None = None, progress=None) -> Result:
+                  max_displacement: float | None = None, progress=None, energy: bool = False) -> Result:
         """Continue to t_end and return the saved history of this stretch."""
         t_end = _checks.real("t_end", t_end)
         if t_end <= self.t:
@@ -109,7 +137,8 @@ class Stepper:
         bound = math.inf if max_displacement is None else _checks.real("max_displacement", max_displacement, positive=True)
         if progress is not None and not callable(progress):
             raise TypeError("progress: expected a callable progress(step, n_steps)")
-        raw = self._st.integrate(t_end, save_every, _dof_indices(self.model, dofs), bound, 4096, progress)
+        raw = self._st.integrate(t_end, save_every, _dof_indices(self.model, dofs), bound, 4096, progress,
+                                 bool(energy))
         res = Result(raw, self.model, self.scheme, self.dt)
         if throw and res.status != "success":
             raise error_for(res.status, res.failure, res)
@@ -118,13 +147,14 @@ class Stepper:
 
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
           save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
-          progress=None) -> Result:
+          progress=None, energy: bool = False) -> Result:
     """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. If
     (t_end - t0)/dt is not an integer the run ends at the first multiple of dt
     past t_end. With ``throw=False`` a failed run returns its partial history
-    with ``status`` set instead of raising.
+    with ``status`` set instead of raising. ``energy=True`` records the
+    energy accounting (``Result.energy``) for models of declared effects.
     """
     _check_model(model)
     _check_scheme(scheme)
@@ -138,7 +168,7 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     st = Stepper(model, scheme, dt, t0=t0, u0=u0, v0=v0)
     init = st.stats
     res = st.integrate(t_end, save_every=save_every, dofs=dofs, throw=False, max_displacement=max_displacement,
-                       progress=progress)
+                       progress=progress, energy=energy)
     res.stats = _add_stats(res.stats, init)
     if throw and res.status != "success":
         raise error_for(res.status, res.failure, res)

@@ -278,15 +278,38 @@ py::dict result_dict(Result&& r) {
   d["status"] = to_string(r.status);
   d["failure"] = failure_dict(r.failure);
   d["num_steps_requested"] = r.num_steps_requested;
+  if (r.energy.size() > 0) d["energy"] = py::cast(std::move(r.energy));
   return d;
 }
 
 effects::Law parse_law(const std::string& s) {
-  using effects::Law;
-  for (Law l : {Law::spring, Law::damper, Law::hardening_spring, Law::cubic_spring, Law::pendulum_gravity,
-                Law::constant_force, Law::harmonic_force})
+  for (effects::Law l : effects::all_laws())
     if (s == effects::to_string(l)) return l;
   throw py::value_error("type: unknown effect type '" + s + "'");
+}
+
+effects::Signal make_signal(const std::string& kind, double amplitude, double omega, double phase,
+                            std::vector<double> t, std::vector<double> values) {
+  if (kind == "none") return {};
+  if (kind == "sine") return effects::Signal::sine(amplitude, omega, phase);
+  if (kind == "table") return effects::Signal::table(std::move(t), std::move(values));
+  throw py::value_error("signal.kind: expected 'sine' or 'table', got '" + kind + "'");
+}
+
+template <class M>
+py::tuple tangent_of(M& md, const Vector& u, const Vector& v, double t) {
+  Stats st;
+  Matrix K(md.size(), md.size()), C(md.size(), md.size());
+  md.tangent(u, v, t, K, C, st);
+  return py::make_tuple(K, C);
+}
+
+template <class M>
+Vector force_of(M& md, const Vector& u, const Vector& v, double t) {
+  Stats st;
+  Vector out(md.size());
+  md.force(u, v, t, out, st);
+  return out;
 }
 
 }  // namespace
@@ -466,29 +489,40 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("mass_matrix", [](const CallableModel& md) { return md.mass().matrix(); })
       .def_property_readonly("K", [](const CallableModel& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); })
       .def_property_readonly("C", [](const CallableModel& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); })
-      .def("force", [](CallableModel& md, const Vector& u, const Vector& v, double t) {
-        Stats st;
-        Vector out(md.size());
-        md.force(u, v, t, out, st);
-        return out;
-      });
+      .def("force", &force_of<CallableModel>, py::arg("u"), py::arg("v"), py::arg("t"))
+      .def("tangent", &tangent_of<CallableModel>, py::arg("u"), py::arg("v"), py::arg("t"));
 
   py::class_<effects::Effect>(m, "Effect")
       .def(py::init([](const std::string& type, std::vector<Index> index, std::vector<double> coef, double p0,
-                       double p1, double p2) {
+                       double p1, double p2, const std::string& name, const std::string& signal,
+                       double amplitude, double omega, double phase, std::vector<double> t,
+                       std::vector<double> values) {
              if (index.size() != coef.size()) throw py::value_error("measure: index and coef lengths differ");
              effects::Measure g;
              for (size_t i = 0; i < index.size(); ++i) g.emplace_back(index[i], coef[i]);
-             return effects::detail_::make(parse_law(type), std::move(g), p0, p1, p2);
+             effects::Effect e = effects::detail_::make(parse_law(type), std::move(g), p0, p1, p2,
+                                                        make_signal(signal, amplitude, omega, phase, std::move(t),
+                                                                    std::move(values)));
+             e.name = name;
+             return e;
            }),
            py::arg("type"), py::arg("index"), py::arg("coef"), py::arg("p0") = 0.0, py::arg("p1") = 0.0,
-           py::arg("p2") = 0.0)
+           py::arg("p2") = 0.0, py::kw_only(), py::arg("name") = "", py::arg("signal") = "none",
+           py::arg("amplitude") = 0.0, py::arg("omega") = 0.0, py::arg("phase") = 0.0,
+           py::arg("t") = std::vector<double>{}, py::arg("values") = std::vector<double>{})
       .def_property_readonly("type", [](const effects::Effect& e) { return effects::to_string(e.law); })
+      .def_readonly("name", &effects::Effect::name)
       .def_readonly("index", &effects::Effect::index)
       .def_readonly("coef", &effects::Effect::coef)
       .def_property_readonly("uses_velocity", &effects::Effect::uses_velocity)
       .def_property_readonly("uses_time", &effects::Effect::uses_time)
-      .def_property_readonly("is_linear", &effects::Effect::is_linear);
+      .def_property_readonly("is_linear", &effects::Effect::is_linear)
+      .def_property_readonly("is_load", &effects::Effect::is_load)
+      .def("value", [](const effects::Effect& e, double d, double dd, double t) { return e.value(d, dd, t); },
+           py::arg("d"), py::arg("dd"), py::arg("t"))
+      .def("__repr__", [](const effects::Effect& e) {
+        return std::string("Effect(") + effects::to_string(e.law) + (e.name.empty() ? "" : ", name='" + e.name + "'") + ")";
+      });
 
   py::class_<EffectModel>(m, "EffectModel")
       .def(py::init([](const py::array_t<double, py::array::forcecast>& mass, std::vector<effects::Effect> list,
@@ -505,13 +539,12 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("mass_matrix", [](const EffectModel& md) { return md.mass().matrix(); })
       .def_property_readonly("K", [](const EffectModel& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); })
       .def_property_readonly("C", [](const EffectModel& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); })
-      .def("potential", [](const EffectModel& md, const Vector& u) { return md.nonlinear_force().potential(u); })
-      .def("force", [](EffectModel& md, const Vector& u, const Vector& v, double t) {
-        Stats st;
-        Vector out(md.size());
-        md.force(u, v, t, out, st);
-        return out;
-      });
+      .def_property_readonly("effects", [](const EffectModel& md) { return md.nonlinear_force().effects(); })
+      .def("potential", [](EffectModel& md, const Vector& u, double t) { return md.potential(u, t); },
+           py::arg("u"), py::arg("t") = 0.0)
+      .def("kinetic", [](EffectModel& md, const Vector& v) { return md.kinetic(v); })
+      .def("force", &force_of<EffectModel>, py::arg("u"), py::arg("v"), py::arg("t"))
+      .def("tangent", &tangent_of<EffectModel>, py::arg("u"), py::arg("v"), py::arg("t"));
 
   // ---- steppers ---------------------------------------------------------------------
   py::class_<AnyStepper>(m, "Stepper")
@@ -531,8 +564,9 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "integrate",
           [](AnyStepper& s, double t_end, std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
-             std::int64_t observe_every, py::object observer) {
+             std::int64_t observe_every, py::object observer, bool energy) {
             SolveOptions opt;
+            opt.energy = energy;
             opt.save_every = save_every;
             opt.dofs = std::move(dofs);
             opt.max_displacement = max_displacement;
@@ -542,7 +576,7 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
           py::arg("max_displacement") = std::numeric_limits<double>::infinity(), py::arg("observe_every") = 4096,
-          py::arg("observer") = py::none());
+          py::arg("observer") = py::none(), py::arg("energy") = false);
 
   def_all_schemes<CallableModel>(m);
   def_all_schemes<EffectModel>(m);

@@ -24,11 +24,19 @@ struct SolveOptions {
   double max_displacement = std::numeric_limits<double>::infinity();
   bool throw_on_failure = true;
   std::int64_t observe_every = 4096;  // steps between observer calls
+  // Record kinetic and potential energy, work of the loads, dissipated energy
+  // and the balance error at every saved state (powers integrated every step
+  // by the trapezoidal rule).
+  bool energy = false;
 };
+
+// Columns of Result::energy.
+enum EnergyColumn { kinetic = 0, potential = 1, work_in = 2, dissipated = 3, balance_error = 4 };
 
 struct Result {
   Vector t;
   History u, v, a;  // (n_saved, n_saved_dofs), row-major
+  History energy;   // (n_saved, 5) if requested: see EnergyColumn
   std::vector<Index> dofs;
   Stats stats;
   Status status = Status::success;
@@ -83,6 +91,20 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   res.u.resize(nsave, m);
   res.v.resize(nsave, m);
   res.a.resize(nsave, m);
+  if (opt.energy) {
+    detail::require(std::decay_t<decltype(st.model())>::accounts_energy(),
+                    "energy: the model has a force whose energy is unknown (a user callable); "
+                    "energy accounting needs built-in effects");
+    res.energy.resize(nsave, 5);
+  }
+  // Energy: powers at the last state, integrals so far, initial total.
+  double p_in = 0.0, p_diss = 0.0, work = 0.0, diss = 0.0, e0 = 0.0;
+  auto& model = st.model();
+  if (opt.energy) {
+    p_in = model.input_power(st.u(), st.v(), st.time());
+    p_diss = model.dissipated_power(st.v());
+    e0 = model.kinetic(st.v()) + model.potential(st.u(), st.time());
+  }
   Index row = 0;
   auto save = [&]() {
     res.t[row] = st.time();
@@ -92,9 +114,18 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       res.v(row, j) = st.v()[d];
       res.a(row, j) = st.a()[d];
     }
+    if (opt.energy) {
+      const double ek = model.kinetic(st.v()), ep = model.potential(st.u(), st.time());
+      res.energy(row, kinetic) = ek;
+      res.energy(row, potential) = ep;
+      res.energy(row, work_in) = work;
+      res.energy(row, dissipated) = diss;
+      res.energy(row, balance_error) = ek + ep + diss - work - e0;
+    }
     ++row;
   };
   save();
+  const double h = st.dt();
 
   const Stats before = st.stats();
   const double bound = opt.max_displacement;
@@ -125,6 +156,13 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       res.status = s;
       break;
     }
+    if (opt.energy) {
+      const double q_in = model.input_power(st.u(), st.v(), st.time()), q_diss = model.dissipated_power(st.v());
+      work += 0.5 * h * (p_in + q_in);
+      diss += 0.5 * h * (p_diss + q_diss);
+      p_in = q_in;
+      p_diss = q_diss;
+    }
     if (i % k == 0 || i == nsteps) save();
     if (i % opt.observe_every == 0) observe(i, nsteps);
   }
@@ -133,6 +171,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     res.u.conservativeResize(row, m);
     res.v.conservativeResize(row, m);
     res.a.conservativeResize(row, m);
+    if (opt.energy) res.energy.conservativeResize(row, 5);
   }
   res.stats = st.stats();
   res.stats -= before;  // counters of this call only (the stepper's own are cumulative)

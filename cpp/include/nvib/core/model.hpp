@@ -29,6 +29,9 @@ struct NoForce {
   bool uses_velocity() const { return false; }
   bool uses_time() const { return false; }
   bool is_linear() const { return true; }
+  double potential(const CVecRef&, double) const { return 0.0; }
+  double input_power(const CVecRef&, const CVecRef&, double) const { return 0.0; }
+  double dissipated_power(const CVecRef&) const { return 0.0; }
 };
 
 namespace traits {
@@ -59,6 +62,16 @@ NVIB_OPTIONAL_FLAG(uses_time, true)
 NVIB_OPTIONAL_FLAG(is_linear, false)
 NVIB_OPTIONAL_FLAG(has_tangent, has_tangent_method<F>::value)
 #undef NVIB_OPTIONAL_FLAG
+
+// Energy accounting of a force: potential(u, t), input_power(u, v, t), dissipated_power(v).
+template <class F, class = void>
+struct has_energy : std::false_type {};
+template <class F>
+struct has_energy<F, std::void_t<decltype(std::declval<const F&>().potential(std::declval<const CVecRef&>(), 0.0)),
+                                 decltype(std::declval<const F&>().input_power(std::declval<const CVecRef&>(),
+                                                                               std::declval<const CVecRef&>(), 0.0)),
+                                 decltype(std::declval<const F&>().dissipated_power(std::declval<const CVecRef&>()))>>
+    : std::true_type {};
 }  // namespace traits
 
 template <class Force = NoForce>
@@ -92,6 +105,7 @@ class Model {
     is_linear_ = traits::is_linear(f_);
     fu_.resize(n);
     fv_.resize(n);
+    work_.resize(n);
     fp_.resize(n);
     fm_.resize(n);
   }
@@ -126,6 +140,37 @@ class Model {
     force(u, v, t, a, st);
     a = -a;
     mass_.solve_in_place(a);
+  }
+
+  // ---- energy accounting ----
+  // Whether every force in the model is accounted for (a force without
+  // potential/power methods, e.g. a user callable, is not).
+  static constexpr bool accounts_energy() { return traits::has_energy<Force>::value; }
+  double kinetic(const CVecRef& v) {
+    mass_.apply(v, work_);
+    return 0.5 * v.dot(work_);
+  }
+  double potential(const CVecRef& u, double t) {
+    double e = 0.0;
+    if (has_K_) {
+      work_.noalias() = K_ * u;
+      e += 0.5 * u.dot(work_);
+    }
+    if constexpr (traits::has_energy<Force>::value) e += f_.potential(u, t);
+    return e;
+  }
+  double input_power(const CVecRef& u, const CVecRef& v, double t) {
+    if constexpr (traits::has_energy<Force>::value) return f_.input_power(u, v, t);
+    return 0.0;
+  }
+  double dissipated_power(const CVecRef& v) {
+    double p = 0.0;
+    if (has_C_) {
+      work_.noalias() = C_ * v;
+      p += v.dot(work_);
+    }
+    if constexpr (traits::has_energy<Force>::value) p += f_.dissipated_power(v);
+    return p;
   }
 
   // Kt = K + df/du, Ct = C + df/dv.  `finite_difference` forces the numerical tangent.
@@ -175,6 +220,7 @@ class Model {
   bool has_K_ = false, has_C_ = false;
   bool uses_velocity_ = false, uses_time_ = false, is_linear_ = true;
   Vector fu_, fv_, fp_, fm_;  // finite-difference workspace
+  Vector work_;               // energy accounting
 };
 
 // Deduction helpers.
