@@ -262,4 +262,6 @@ class Model:
                 r = self.evaluate_force(u, v, t)
                 if np.max(np.abs(r)) <= 1e-8 * scale:
                     return u
-        raise ValueError(f"initial: static_equilibrium did not converge in {max_iter} Newton iterations")
+        raise ValueError(f"initial: static_equilibrium did not converge in {max_iter} Newton iterations; "
+                         "a body that no spring or contact holds against a constant load has no static "
+                         "equilibrium (was a support left out?)")
