@@ -101,7 +101,7 @@ class Model:
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
                  u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
-        m = np.asarray(mass, dtype=float) if not isinstance(mass, numbers.Real) else np.asarray([mass], dtype=float)
+        m = np.ascontiguousarray(mass if not isinstance(mass, numbers.Real) else [mass], dtype=float)
         if m.ndim not in (1, 2):
             raise ValueError(f"mass: expected a 1-D array (diagonal) or a 2-D matrix, got {m.ndim} dimensions")
         n = m.shape[0]
@@ -253,7 +253,10 @@ class Model:
             if np.linalg.cond(K) < 1e13:
                 du = np.linalg.solve(K, -r)
             else:
-                mu = 1e-3 * max(np.max(np.abs(np.diag(K)) / mdiag), 1e-300)
+                # mu ~ a squared frequency: a thousandth of the stiffest DOF's, or
+                # 1 rad^2/s^2 where nothing is stiff yet (a body on open contacts).
+                ratio = np.max(np.abs(np.diag(K)) / mdiag)
+                mu = 1e-3 * ratio if ratio > 0 else 1.0
                 du = np.linalg.solve(K + mu * np.diag(mdiag), -r)
             u += du
             if not np.all(np.isfinite(u)):

@@ -103,12 +103,18 @@ struct PyForce {
   bool uses_velocity() const { return !force.is_none() && velocity; }
   bool uses_time() const { return !force.is_none() && time; }
   bool is_linear() const { return force.is_none(); }
+  // Energy: a model without a force callable is K, C and M only; the energy
+  // of a user callable is unknown.
+  bool accounts_energy() const { return force.is_none(); }
+  double potential(const CVecRef&, double) const { return 0.0; }
+  double input_power(const CVecRef&, const CVecRef&, double) const { return 0.0; }
+  double dissipated_power(const CVecRef&) const { return 0.0; }
 };
 
 using CallableModel = Model<PyForce>;
 using EffectModel = Model<effects::EffectSet>;
 
-Mass make_mass(const py::array_t<double, py::array::forcecast>& m) {
+Mass make_mass(const py::array_t<double, py::array::c_style | py::array::forcecast>& m) {
   if (m.ndim() == 1) return Mass::diagonal(Eigen::Map<const Vector>(m.data(), m.shape(0)));
   if (m.ndim() == 2) {
     Matrix M = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
@@ -469,7 +475,7 @@ PYBIND11_MODULE(_core, m) {
 
   // ---- models -----------------------------------------------------------------------
   py::class_<CallableModel>(m, "CallableModel")
-      .def(py::init([](const py::array_t<double, py::array::forcecast>& mass, const Matrix& K, const Matrix& C,
+      .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& mass, const Matrix& K, const Matrix& C,
                        py::object force, py::object tangent, bool uses_velocity, bool uses_time) {
              Mass ms = make_mass(mass);
              PyForce f;
@@ -525,7 +531,7 @@ PYBIND11_MODULE(_core, m) {
       });
 
   py::class_<EffectModel>(m, "EffectModel")
-      .def(py::init([](const py::array_t<double, py::array::forcecast>& mass, std::vector<effects::Effect> list,
+      .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& mass, std::vector<effects::Effect> list,
                        const Matrix& K, const Matrix& C) {
              return effects::make_effect_model(make_mass(mass), std::move(list), K, C);
            }),

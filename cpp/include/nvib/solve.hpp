@@ -92,7 +92,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   res.v.resize(nsave, m);
   res.a.resize(nsave, m);
   if (opt.energy) {
-    detail::require(std::decay_t<decltype(st.model())>::accounts_energy(),
+    detail::require(st.model().accounts_energy(),
                     "energy: the model has a force whose energy is unknown (a user callable); "
                     "energy accounting needs built-in effects");
     res.energy.resize(nsave, 5);

@@ -61,6 +61,7 @@ NVIB_OPTIONAL_FLAG(uses_velocity, true)
 NVIB_OPTIONAL_FLAG(uses_time, true)
 NVIB_OPTIONAL_FLAG(is_linear, false)
 NVIB_OPTIONAL_FLAG(has_tangent, has_tangent_method<F>::value)
+NVIB_OPTIONAL_FLAG(accounts_energy, true)
 #undef NVIB_OPTIONAL_FLAG
 
 // Energy accounting of a force: potential(u, t), input_power(u, v, t), dissipated_power(v).
@@ -143,9 +144,12 @@ class Model {
   }
 
   // ---- energy accounting ----
-  // Whether every force in the model is accounted for (a force without
-  // potential/power methods, e.g. a user callable, is not).
-  static constexpr bool accounts_energy() { return traits::has_energy<Force>::value; }
+  // Whether every force in the model is accounted for: a force without
+  // potential/power methods is not, nor one whose accounts_energy() says no.
+  bool accounts_energy() const {
+    if constexpr (traits::has_energy<Force>::value) return traits::accounts_energy(f_);
+    return false;
+  }
   double kinetic(const CVecRef& v) {
     mass_.apply(v, work_);
     return 0.5 * v.dot(work_);

@@ -1,0 +1,254 @@
+"""Energy accounting (solve(..., energy=True)): the balance closes on fine
+steps, its error falls as dt^2, and each term matches a closed form."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import nvib
+
+
+def fitted_order(dts, errors):
+    return float(np.polyfit(np.log(dts), np.log(errors), 1)[0])
+
+
+def run(model, scheme, dt, t_end, **kw):
+    res = nvib.solve(model, scheme, dt=dt, t_end=t_end, energy=True, **kw)
+    assert res.success and res.energy is not None
+    return res
+
+
+# ---------------------------------------------------------------------------
+# the balance closes on fine steps
+
+
+@pytest.mark.parametrize("scheme", [nvib.CEMDTS(), nvib.Newmark(), nvib.CentralDifference()],
+                         ids=lambda s: type(s).__name__)
+def test_building_balance_fine_step(scheme):
+    res = run(nvib.load_scene("building"), scheme, 1e-4, 10.0, save_every=100)
+    e = res.energy
+    assert e.balance_error[0] == 0.0 and e.work_in[0] == 0.0 and e.dissipated[0] == 0.0
+    assert np.all(e.dissipated == 0.0)  # undamped
+    assert e.work_in.max() > 0  # the ground does work
+    assert e.relative_balance_error() < 1e-6
+
+
+# Measured relative balance errors (t_end = 1 s): PIM 1e-5: 4.6e-8, Newmark 1e-5: 6.5e-7,
+# GαM 1e-5: 3.0e-7, CD 5e-6: 2.5e-7, CEMDTS 2.5e-6: 1.4e-7 (5e-6: 1.01e-6, 1e-5: 4.0e-6).
+VEHICLE_RUNS = [
+    (nvib.PreciseIntegration(), 1e-5),
+    (nvib.Newmark(), 1e-5),
+    (nvib.GeneralizedAlpha(), 1e-5),
+    (nvib.CentralDifference(), 5e-6),
+    (nvib.CEMDTS(), 2.5e-6),
+]
+
+
+@pytest.mark.parametrize("scheme, dt", VEHICLE_RUNS, ids=[f"{type(s).__name__}-{dt:g}" for s, dt in VEHICLE_RUNS])
+def test_vehicle_balance_fine_step(scheme, dt):
+    veh = nvib.load_scene("vehicle")
+    res = run(veh, scheme, dt, 1.0, save_every=1000)
+    e = res.energy
+    assert e.dissipated[-1] > 0 and np.all(np.diff(e.dissipated) >= 0)  # dampers only take energy out
+    assert e.relative_balance_error() < 1e-6
+
+
+def test_balance_error_order_building():
+    b = nvib.load_scene("building")
+    dts = [4e-4, 2e-4, 1e-4]
+    errs = [run(b, nvib.CEMDTS(), dt, 10.0, save_every=50).energy.relative_balance_error() for dt in dts]
+    assert 1.8 <= fitted_order(dts, errs) <= 2.2, errs
+
+
+@pytest.mark.parametrize("scheme", [nvib.CEMDTS(), nvib.Newmark(), nvib.CentralDifference(), nvib.GeneralizedAlpha()],
+                         ids=lambda s: type(s).__name__)
+def test_balance_error_order_hardening(scheme):
+    h = nvib.load_scene("hardening")
+    dts = [1e-4, 5e-5, 2.5e-5]
+    errs = [run(h, scheme, dt, 0.3).energy.relative_balance_error() for dt in dts]
+    assert 1.8 <= fitted_order(dts, errs) <= 2.2, errs
+
+
+def every_effect_model(irregularity):
+    """One model with every effect type, the rail moving under the contact."""
+    eff = [
+        {"type": "spring", "measure": {"a": 1.0}, "k": 400.0},
+        {"type": "hardening_spring", "measure": {"b": 1.0, "a": -1.0}, "k0": 300.0, "a": 20.0},
+        {"type": "cubic_spring", "measure": {"c": 1.0, "b": -1.0}, "k3": 2000.0},
+        {"type": "spring", "measure": {"c": 1.0, "b": -1.0}, "k": 100.0},
+        {"type": "pendulum_gravity", "measure": {"c": 1.0}, "m": 1.0, "g": 9.81, "l": 2.0},
+        {"type": "damper", "measure": {"b": 1.0}, "c": 0.8},
+        {"type": "power_damper", "measure": {"c": 1.0, "a": -1.0}, "c": 0.5, "p": 1.5},
+        {"type": "hertz_contact", "measure": {"a": 1.0}, "G": 1e-3, "contacts": 2.0, "irregularity": irregularity},
+        {"type": "constant_force", "measure": {"a": 1.0}, "value": 5.0},
+        {"type": "harmonic_force", "measure": {"c": 1.0}, "amplitude": 3.0, "omega": 4.0, "phase": 0.3},
+        {"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 2.0, "omega": 5.0}},
+    ]
+    assert {e["type"] for e in eff} == set(nvib.EFFECT_PARAMETERS)
+    return nvib.Model([1.0, 2.0, 1.5], effects=eff, dofs=["a", "b", "c"], u0=[0.05, -0.1, 0.1], v0=[0.3, 0.0, -0.2])
+
+
+@pytest.mark.parametrize("irregularity", [
+    {"kind": "sine", "amplitude": 0.02, "omega": 9.0},
+    {"kind": "table", "t": [0.0, 1.0, 2.0, 3.0, 4.0], "values": [0.0, 0.02, -0.01, 0.03, 0.0]},
+], ids=["sine", "table"])
+@pytest.mark.parametrize("scheme", [nvib.CEMDTS(), nvib.Newmark(), nvib.CentralDifference()], ids=lambda s: type(s).__name__)
+def test_balance_with_every_effect_type(irregularity, scheme):
+    m = every_effect_model(irregularity)
+    dts = [4e-4, 2e-4, 1e-4]
+    errs = []
+    for dt in dts:
+        e = run(m, scheme, dt, 5.0, save_every=10).energy
+        errs.append(e.relative_balance_error())
+    assert e.dissipated[-1] > 1.0 and np.all(np.diff(e.dissipated) >= -1e-15)
+    assert errs[-1] < 1e-4
+    assert 1.8 <= fitted_order(dts, errs) <= 2.2, errs
+
+
+# ---------------------------------------------------------------------------
+# each term against a closed form
+
+
+def test_kinetic_energy_with_a_dense_mass():
+    rng = np.random.default_rng(5)
+    A = rng.normal(size=(3, 3))
+    M = A @ A.T + 3 * np.eye(3)
+    m = nvib.Model(M, effects=[{"type": "hardening_spring", "measure": {"u0": 1.0}, "k0": 50.0, "a": 3.0},
+                               {"type": "spring", "measure": {"u1": 1.0, "u0": -1.0}, "k": 80.0},
+                               {"type": "spring", "measure": {"u2": 1.0, "u1": -1.0}, "k": 30.0},
+                               {"type": "damper", "measure": {"u2": 1.0}, "c": 0.3}],
+                   u0=[0.2, -0.1, 0.3], v0=[0.0, 1.0, -0.5])
+    res = run(m, nvib.CEMDTS(), 1e-3, 2.0)
+    expected = 0.5 * np.einsum("ni,ij,nj->n", res.v, M, res.v)
+    np.testing.assert_allclose(res.energy.kinetic, expected, rtol=1e-12)
+
+
+def test_potential_of_the_hardening_spring():
+    h = nvib.load_scene("hardening")
+    res = run(h, nvib.CEMDTS(), 1e-3, 0.3)
+    x = res.u[:, 0]
+    np.testing.assert_allclose(res.energy.potential, 100.0 * (0.5 * x**2 + 0.25 * 30.0 * x**4), rtol=1e-12)
+    np.testing.assert_allclose(res.energy.kinetic, 0.5 * res.v[:, 0] ** 2, rtol=1e-12)
+
+
+def test_potential_of_the_building():
+    res = run(nvib.load_scene("building"), nvib.CEMDTS(), 1e-3, 2.0, save_every=10)
+    drift = np.diff(np.hstack([np.zeros((len(res.t), 1)), res.u]), axis=1)
+    expected = (1e8 * (0.5 * drift**2 + 0.25 * 10.0 * drift**4)).sum(axis=1)
+    np.testing.assert_allclose(res.energy.potential, expected, rtol=1e-12, atol=1e-12 * expected.max())
+
+
+@pytest.mark.parametrize("params, V", [
+    ({"type": "spring", "k": 300.0}, lambda d: 150.0 * d**2),
+    ({"type": "hardening_spring", "k0": 300.0, "a": 20.0}, lambda d: 300.0 * (d**2 / 2 + 20.0 * d**4 / 4)),
+    ({"type": "cubic_spring", "k3": 2000.0}, lambda d: 500.0 * d**4),
+    ({"type": "pendulum_gravity", "m": 2.0, "g": 9.81, "l": 0.5}, lambda d: 2.0 * 9.81 * 0.5 * (1 - np.cos(d))),
+    # ∫0^δ n (x/G)^{3/2} dx = n G (δ/G)^{5/2} / (5/2)
+    ({"type": "hertz_contact", "G": 1e-3, "contacts": 2.0},
+     lambda d: np.where(d > 0, 2.0 * 1e-3 * np.clip(d / 1e-3, 0, None) ** 2.5 / 2.5, 0.0)),
+], ids=["spring", "hardening_spring", "cubic_spring", "pendulum_gravity", "hertz_contact"])
+def test_potential_closed_forms(params, V):
+    # a mass on a spring (for the contact: pressed onto it by a constant force, bouncing off)
+    eff = [dict(params, measure={"x": 1.0, "y": -0.5})]
+    load = params["type"] == "hertz_contact"
+    if load:
+        eff.append({"type": "constant_force", "measure": {"x": 1.0}, "value": 40.0})
+    else:
+        eff.append({"type": "spring", "measure": {"y": 1.0}, "k": 10.0})
+    m = nvib.Model([1.0, 2.0], effects=eff, dofs=["x", "y"], u0=[0.0 if load else 0.4, 0.0], v0=[2.0, 0.0])
+    res = run(m, nvib.CEMDTS(), 1e-4, 2.0, save_every=20)
+    d = res.u[:, 0] - 0.5 * res.u[:, 1]
+    extra = 0.0 if load else 5.0 * res.u[:, 1] ** 2
+    expected = V(d) + extra
+    np.testing.assert_allclose(res.energy.potential, expected, rtol=1e-12, atol=1e-14 * np.abs(expected).max())
+    if load:
+        assert np.any(d < 0) and np.any(d > 0)  # the contact opens and closes
+
+
+def spring_under_constant_force():
+    return nvib.Model([1.0], effects=[{"type": "spring", "measure": {"x": 1.0}, "k": 100.0},
+                                      {"type": "constant_force", "measure": {"x": 1.0}, "value": 5.0}],
+                      dofs=["x"], u0=[0.01], v0=[0.3])
+
+
+def test_work_of_a_constant_force_newmark():
+    # the trapezoidal rule integrates P v exactly as Newmark's (β = 1/4, γ = 1/2)
+    # update integrates v: work_in = F Δu to round-off
+    res = run(spring_under_constant_force(), nvib.Newmark(), 1e-3, 2.0)
+    np.testing.assert_allclose(res.energy.work_in, 5.0 * (res.u[:, 0] - 0.01), rtol=1e-10, atol=1e-14)
+    assert res.energy.relative_balance_error() < 1e-12  # linear: Newmark conserves energy exactly
+
+
+@pytest.mark.parametrize("scheme", [nvib.CEMDTS(), nvib.CentralDifference(), nvib.PreciseIntegration()],
+                         ids=lambda s: type(s).__name__)
+def test_work_of_a_constant_force(scheme):
+    res = run(spring_under_constant_force(), scheme, 1e-4, 2.0, save_every=10)
+    work = 5.0 * (res.u[:, 0] - 0.01)
+    scale = np.abs(work).max()
+    np.testing.assert_allclose(res.energy.work_in, work, atol=1e-6 * scale)
+
+
+@pytest.mark.parametrize("dense", [False, True], ids=["lumped", "dense"])
+def test_work_of_a_ground_acceleration_on_a_free_mass(dense):
+    # u'' = -a_g = -A sin(w t) on every DOF: v = -(A/w)(1 - cos w t); P = -M 1 A sin(w t);
+    # ∫ P.v dt = (1'M1) A^2 (1 - cos w t)^2 / (2 w^2) = the kinetic energy
+    A, w = 2.0, 5.0
+    if dense:
+        B = np.random.default_rng(5).normal(size=(3, 3))
+        M = B @ B.T + 3 * np.eye(3)
+    else:
+        M = np.diag([3.0, 1.0, 2.0])
+    m = nvib.Model(M if dense else np.diag(M), effects=[{"type": "ground_acceleration",
+                                                          "signal": {"kind": "sine", "amplitude": A, "omega": w}}])
+    res = run(m, nvib.Newmark(), 1e-4, 3.0, save_every=100)
+    np.testing.assert_allclose(res.u, -(A / w**2) * (w * res.t - np.sin(w * res.t))[:, None] * np.ones(3),
+                               atol=1e-7)
+    expected = M.sum() * A**2 * (1 - np.cos(w * res.t)) ** 2 / (2 * w**2)
+    np.testing.assert_allclose(res.energy.work_in, expected, atol=2e-7 * expected.max())
+    np.testing.assert_allclose(res.energy.kinetic, expected, atol=2e-7 * expected.max())
+
+
+def test_work_of_a_moving_rail():
+    # a mass resting on a Hertz contact under its weight; the rail moves r(t) = A sin(w t).
+    # The rail's work is the only input besides the weight's F Δu, and it is not small.
+    G, W = 1e-4, 10.0
+    m = nvib.Model([1.0], effects=[{"type": "constant_force", "measure": {"w": 1.0}, "value": W},
+                                   {"type": "hertz_contact", "measure": {"w": 1.0}, "G": G,
+                                    "irregularity": {"kind": "sine", "amplitude": 2e-4, "omega": 20.0}}],
+                   dofs=["w"])
+    u0 = G * W ** (2.0 / 3.0)  # static Hertz compression under the weight
+    np.testing.assert_allclose(m.evaluate_force([u0], [0.0]), 0.0, atol=1e-12 * W)
+    errs = []
+    for dt in (4e-5, 2e-5, 1e-5):
+        res = run(m, nvib.Newmark(), dt, 2.0, u0=[u0], save_every=10)
+        e = res.energy
+        errs.append(e.relative_balance_error())
+    rail_work = e.work_in - W * (res.u[:, 0] - u0)
+    scale = np.max(e.kinetic + e.potential)
+    assert np.max(np.abs(rail_work)) > 0.1 * scale
+    assert errs[-1] < 1e-8
+    assert 1.8 <= fitted_order([4e-5, 2e-5, 1e-5], errs) <= 2.2, errs
+
+
+def test_dissipated_energy_of_a_linear_damper():
+    M, K, C, x0 = 2.0, 800.0, 4.0, 0.1  # damping ratio 0.05
+    m = nvib.Model([M], effects=[{"type": "spring", "measure": {"x": 1.0}, "k": K},
+                                 {"type": "damper", "measure": {"x": 1.0}, "c": C}], dofs=["x"], u0=[x0])
+    res = run(m, nvib.Newmark(), 2.5e-5, 5.0, save_every=40)
+    x, v = nvib.exact.linear_sdof(res.t, m=M, k=K, c=C, x0=x0)
+    E = 0.5 * M * v**2 + 0.5 * K * x**2
+    E0 = 0.5 * K * x0**2
+    e = res.energy
+    assert E[-1] < 0.001 * E0  # nearly all of it dissipated by t = 5 s
+    np.testing.assert_allclose(e.dissipated, E0 - E, atol=1e-7 * E0)  # the loss of mechanical energy
+    np.testing.assert_allclose(e.kinetic + e.potential, E, atol=1e-7 * E0)
+    assert np.all(e.work_in == 0.0)
+
+
+def test_energy_needs_declared_effects():
+    m = nvib.Model([1.0], force=lambda u, v, t: 100.0 * u, u0=[1.0])
+    with pytest.raises(ValueError, match="energy"):
+        nvib.solve(m, nvib.CEMDTS(), dt=1e-3, t_end=0.01, energy=True)
+    # without energy=True the same model runs and reports no energy
+    assert nvib.solve(m, nvib.CEMDTS(), dt=1e-3, t_end=0.01).energy is None
