@@ -139,8 +139,10 @@ class Model:
                 e.get("type") for e in effects if isinstance(e, dict)}
             for w in self.without:
                 if w not in known:
+                    names = sorted({str(e.get("name")) for e in effects if isinstance(e, dict) and e.get("name")})
+                    types = sorted({str(e.get("type")) for e in effects if isinstance(e, dict) and e.get("type")})
                     raise ValueError(f"without: no effect named or typed {w!r} in this model "
-                                     f"(names: {', '.join(sorted(str(k) for k in known if k))})")
+                                     f"(names: {', '.join(names) or 'none'}; types: {', '.join(types)})")
             kept = [(i, e) for i, e in enumerate(effects)
                     if not (isinstance(e, dict) and (e.get("name") in self.without or e.get("type") in self.without))]
             self.effects = [self._effect(i, e) for i, e in kept]

@@ -33,7 +33,10 @@ class Energy:
 
     def relative_balance_error(self) -> float:
         """max |balance error| over the largest energy magnitude seen in the run."""
-        scale = np.max(np.abs(self.kinetic) + np.abs(self.potential) + np.abs(self.work_in) + np.abs(self.dissipated))
+        parts = np.abs(self.kinetic) + np.abs(self.potential) + np.abs(self.work_in) + np.abs(self.dissipated)
+        if not (np.all(np.isfinite(parts)) and np.all(np.isfinite(self.balance_error))):
+            return float("inf")  # a run that blew up
+        scale = np.max(parts)
         return float(np.max(np.abs(self.balance_error)) / scale) if scale > 0 else 0.0
 
     def as_dict(self) -> dict:
@@ -118,12 +121,15 @@ class Stepper:
         n = _checks.integer("n", n, minimum=1)
         for _ in range(n):
             status = self._st.step()
-            if status == "success" and not (np.all(np.isfinite(self._st.u)) and np.all(np.isfinite(self._st.v))):
-                status = "diverged"
-                failure = {"message": f"diverged at t = {self._st.t:g} (step {self._st.step_index}): non-finite state",
-                           "t": self._st.t, "step": self._st.step_index, "dof": int(np.argmax(~np.isfinite(self._st.u))),
-                           "residuals": []}
-                raise error_for(status, failure, None)
+            if status == "success":
+                for name in ("u", "v", "a"):
+                    x = getattr(self._st, name)
+                    if not np.all(np.isfinite(x)):
+                        dof = int(np.argmax(~np.isfinite(x)))
+                        failure = {"message": f"diverged at t = {self._st.t:g} (step {self._st.step_index}): "
+                                              f"{name}[{dof}] = {x[dof]:g}, not finite",
+                                   "t": self._st.t, "step": self._st.step_index, "dof": dof, "residuals": []}
+                        raise error_for("diverged", failure, None)
             if status != "success":
                 raise error_for(status, self._st.failure, None)
 

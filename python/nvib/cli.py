@@ -1,10 +1,166 @@
-"""The ``nvib`` command line (also ``python -m nvib``)."""
+"""The ``nvib`` command line (also ``python -m nvib``).
+
+    nvib scenes                      the built-in scenes
+    nvib run SCENE [options]         integrate a scene, print a summary, optionally --out / --plot
+    nvib demo                        hardening oscillator with every scheme against its closed form
+
+Exit status: 0 success, 1 the run failed (diverged, Newton failed) or an
+output could not be written, 2 bad input (the message names the argument).
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import re
 import sys
+import time
+from collections import Counter
+from fractions import Fraction
 
+SCHEME_CHOICES = ("lcdm", "cd", "cemdts", "zhai", "newmark", "galpha", "pim")
+OUT_FORMATS = (".npz", ".csv")
+PLOT_FORMATS = (".png", ".svg", ".pdf")
+MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
+
+# Scheme options: flag -> (constructor keyword, schemes it applies to)
+_SCHEME_OPTIONS = {
+    "velocity": ("velocity", ("lcdm", "cd")),
+    "eta": ("eta", ("cemdts",)),
+    "psi": ("psi", ("zhai",)),
+    "phi": ("phi", ("zhai",)),
+    "beta": ("beta", ("newmark", "galpha")),
+    "gamma": ("gamma", ("newmark", "galpha")),
+    "alpha_m": ("alpha_m", ("galpha",)),
+    "alpha_f": ("alpha_f", ("galpha",)),
+    "rho_inf": ("rho_inf", ("galpha",)),
+    "iteration": ("iteration", ("newmark", "galpha")),
+    "squarings": ("squarings", ("pim",)),
+    "order": ("order", ("pim",)),
+    "corrections": ("corrections", ("pim",)),
+}
+
+
+class _Usage(Exception):
+    """Bad input discovered after parsing: becomes ``nvib run: error: argument X: ...`` and exit 2."""
+
+    def __init__(self, argument: str | None, message: str):
+        super().__init__(message)
+        self.argument = argument
+        self.message = message
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _named(message: str, known: dict[str, str]) -> tuple[str | None, str]:
+    """Split a library message 'eta: needs ...' into (the CLI argument, the rest) when the name is known."""
+    m = re.match(r"^([A-Za-z_][\w, ]*?): (.*)$", message, re.S)
+    if m:
+        names = [n.strip() for n in m.group(1).split(",")]
+        if all(n in known for n in names):
+            return "/".join(known[n] for n in names), m.group(2)
+    return None, message
+
+
+# ---------------------------------------------------------------- argument types
+
+def _real(text: str) -> float:
+    """A finite real number; fractions such as 1/4 or 1/12 are accepted."""
+    try:
+        x = float(text)
+    except ValueError:
+        try:
+            x = float(Fraction(text.strip()))
+        except (ValueError, ZeroDivisionError):
+            raise argparse.ArgumentTypeError(f"expected a number (such as 0.25 or 1/4), got {text!r}") from None
+    if not math.isfinite(x):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return x
+
+
+def _positive_real(text: str) -> float:
+    x = _real(text)
+    if x <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return x
+
+
+def _positive_int(text: str) -> int:
+    try:
+        k = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if k < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text!r}")
+    return k
+
+
+def _int(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+
+
+# ---------------------------------------------------------------- formatting helpers
+
+def _seconds(x: float) -> str:
+    if x < 1e-3:
+        return f"{x * 1e6:.0f} us"
+    if x < 1.0:
+        return f"{x * 1e3:.3g} ms"
+    return f"{x:.3g} s"
+
+
+def _effect_summary(model) -> str:
+    if not model.effects:
+        return "(none)"
+    counts = Counter(e.type for e in model.effects)
+    return ", ".join(k if c == 1 else f"{k} x{c}" for k, c in counts.items())
+
+
+def _table(rows: list[list[str]], right: set[int] = frozenset()) -> list[str]:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    out = []
+    for r in rows:
+        cells = [c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))]
+        out.append("  ".join(cells).rstrip())
+    return out
+
+
+# ---------------------------------------------------------------- nvib scenes
+
+def _scenes(args) -> int:
+    from . import load_scene, scene_names
+
+    rows = [["name", "DOFs", "dt [s]", "t_end [s]", "effects", "title"]]
+    sources = []
+    for name in scene_names():
+        try:
+            m = load_scene(name)
+        except (ValueError, OSError) as exc:  # a broken built-in scene should not hide the others
+            rows.append([name, "?", "?", "?", "?", f"cannot load: {exc}"])
+            continue
+        s = m.scene
+        rows.append([name, str(m.n), "-" if s["dt"] is None else f"{s['dt']:g}",
+                     "-" if s["t_end"] is None else f"{s['t_end']:g}", _effect_summary(m), s["title"]])
+        sources.append((name, s["source"]))
+    lines = _table(rows, right={1, 2, 3})
+    lines.insert(1, "-" * max(len(line) for line in lines))
+    print("\n".join(lines))
+    if sources:
+        print("\nsources:")
+        w = max(len(n) for n, _ in sources)
+        for n, src in sources:
+            print(f"  {n:<{w}}  {src or '-'}")
+    print("\nrun one with: nvib run NAME  (--without takes an effect name or type; see nvib run --help)")
+    return 0
+
+
+# ---------------------------------------------------------------- nvib demo
 
 def _demo(args) -> int:
     from . import demo
@@ -20,19 +176,365 @@ def _demo(args) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    from . import __version__, cmake_dir, include_dir
+# ---------------------------------------------------------------- nvib run
+
+def _make_scheme(args):
+    from . import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
+
+    given = {opt: getattr(args, opt) for opt in _SCHEME_OPTIONS if getattr(args, opt) is not None}
+    for opt in given:
+        _, applies = _SCHEME_OPTIONS[opt]
+        if args.scheme not in applies:
+            raise _Usage(_flag(opt), f"does not apply to --scheme {args.scheme} (only to {', '.join(applies)})")
+    kw = {_SCHEME_OPTIONS[opt][0]: val for opt, val in given.items()}
+    if "rho_inf" in kw:
+        clash = [o for o in ("alpha_m", "alpha_f", "beta", "gamma") if o in kw]
+        if clash:
+            raise _Usage("--rho-inf", f"sets alpha_m, alpha_f, beta and gamma itself; drop "
+                         f"{', '.join(_flag(c) for c in clash)}")
+    known = {_SCHEME_OPTIONS[o][0]: _flag(o) for o in _SCHEME_OPTIONS}
+    try:
+        if args.scheme in ("lcdm", "cd"):
+            return CentralDifference(**kw)
+        if args.scheme == "cemdts":
+            return CEMDTS(**kw)
+        if args.scheme == "zhai":
+            return Zhai(**kw)
+        if args.scheme == "newmark":
+            return Newmark(**kw)
+        if args.scheme == "galpha":
+            if "rho_inf" in kw:
+                return GeneralizedAlpha.from_rho_inf(kw.pop("rho_inf"), **kw)
+            return GeneralizedAlpha(**kw)
+        return PreciseIntegration(**kw)
+    except (ValueError, TypeError) as exc:
+        arg, msg = _named(str(exc), known)
+        raise _Usage(arg or "--scheme", msg) from None
+
+
+def _load_model(args):
+    """The scene's model without the --without effects, and notes for the user."""
+    from . import SceneError, load_scene
+    from ._scenes import scene_from_dict, tomllib
+
+    notes = []
+    try:
+        full = load_scene(args.scene)
+    except (OSError, ValueError) as exc:  # unknown name, missing file, malformed scene (SceneError)
+        raise _Usage("SCENE", str(exc).removeprefix("scene: ")) from None
+    if not args.without:
+        return full, notes
+    names = sorted({e.name for e in full.effects if e.name})
+    types = sorted({e.type for e in full.effects})
+    for w in args.without:
+        if w not in names and w not in types:
+            raise _Usage("--without", f"no effect named or typed {w!r} in scene {full.scene['name']!r} "
+                         f"(names: {', '.join(names) or '-'}; types: {', '.join(types) or '-'})")
+    try:
+        model = load_scene(args.scene, without=args.without)
+    except SceneError as exc:
+        if full.scene.get("initial_u") != "static_equilibrium" or "static_equilibrium" not in str(exc):
+            raise _Usage("--without", str(exc)) from None
+        # Without e.g. the wheel-rail contact a vehicle has no equilibrium to rest in:
+        # start from the full scene's equilibrium instead (same initial state, fewer forces).
+        with open(full.scene["path"], "rb") as fh:
+            data = tomllib.load(fh)
+        data.setdefault("initial", {})["u"] = [float(x) for x in full.u0]
+        try:
+            model = scene_from_dict(data, path=full.scene["path"], without=args.without)
+        except SceneError as exc2:
+            raise _Usage("--without", str(exc2)) from None
+        model.scene["initial_u"] = "static equilibrium of the full scene"
+        notes.append(f"without {', '.join(args.without)} the model has no static equilibrium; "
+                     f"starting from that of the full scene")
+    if not model.effects:
+        notes.append("no effects left: the model is a free mass (u = u0 + v0 t)")
+    return model, notes
+
+
+def _check_output(arg: str, path: str, formats: tuple[str, ...]) -> None:
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in formats:
+        raise _Usage(arg, f"expected a file ending in {' or '.join(formats)}, got {path!r}")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise _Usage(arg, f"folder {folder!r} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise _Usage(arg, f"folder {folder!r} is not writable")
+
+
+def write_npz(path: str, result, extra: dict | None = None) -> None:
+    """t, u, v, a, dofs, the stats counters, energy_* columns (if recorded) and run metadata."""
+    import numpy as np
+
+    data = {"t": result.t, "u": result.u, "v": result.v, "a": result.a, "dofs": np.array(result.dofs, dtype=str),
+            "status": np.array(result.status), "scheme": np.array(repr(result.scheme)), "dt": np.array(result.dt)}
+    for k, val in result.stats.as_dict().items():
+        data[k] = np.array(val)
+    if result.energy is not None:
+        for k, val in result.energy.as_dict().items():
+            data[f"energy_{k}"] = val
+    if result.failure:
+        data["failure"] = np.array(str(result.failure.get("message", result.status)))
+    for k, val in (extra or {}).items():
+        data[k] = np.array(val)
+    with open(path, "wb") as fh:
+        np.savez_compressed(fh, **data)
+
+
+def write_csv(path: str, result) -> None:
+    """Header t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...]; full double precision."""
+    import numpy as np
+
+    cols = [result.t[:, None], result.u, result.v, result.a]
+    head = ["t"] + [f"{q}:{d}" for q in ("u", "v", "a") for d in result.dofs]
+    if result.energy is not None:
+        for k, val in result.energy.as_dict().items():
+            cols.append(np.asarray(val)[:, None])
+            head.append(f"energy:{k}")
+    table = np.hstack(cols) if len(result.t) else np.zeros((0, len(head)))
+    np.savetxt(path, table, fmt="%.17g", delimiter=",", header=",".join(head), comments="")
+
+
+def _failure_line(result, scheme, dt: float) -> str:
+    f = result.failure or {}
+    t, step = f.get("t"), f.get("step")
+    msg = str(f.get("message", result.status))
+    where = f" at t = {t:g} s (step {step})" if t is not None else ""
+    # the library's message repeats the time; keep its detail only
+    detail = re.sub(r"^diverged at t = [^:]*: ?", "", msg)
+    detail = re.sub(r" at t = [-+0-9.eE]+", "", detail)
+    if result.status == "diverged":
+        head, hint = f"diverged{where}", "try a smaller --dt" + (" or an implicit scheme" if scheme.is_explicit else "")
+    elif result.status == "newton_failed":
+        full_newton = getattr(scheme, "iteration", "newton") == "newton"
+        head, hint = f"Newton iteration failed{where}", "try a smaller --dt" + ("" if full_newton else
+                                                                                " or --iteration newton")
+    elif result.status == "singular_matrix":
+        head, hint = f"singular iteration matrix{where}", "try a smaller --dt"
+    else:
+        head, hint = f"run failed ({result.status}){where}", ""
+    line = f"{head} with {scheme.name}, dt = {dt:g} s"
+    if detail:
+        line += f": {detail}"
+    return line + (f" ({hint})" if hint else "")
+
+
+def _run(args, parser) -> int:
+    try:
+        return _run_checked(args)
+    except _Usage as exc:
+        parser.error(f"argument {exc.argument}: {exc.message}" if exc.argument else exc.message)
+    return 2  # not reached: parser.error exits
+
+
+def _run_checked(args) -> int:
+    import numpy as np
+
+    from . import _core, solve
+    from ._progress import ProgressBar
+
+    if args.out:
+        _check_output("--out", args.out, OUT_FORMATS)
+    if args.plot:
+        _check_output("--plot", args.plot, PLOT_FORMATS)
+        import importlib.util
+
+        if importlib.util.find_spec("matplotlib") is None:
+            raise _Usage("--plot", "needs matplotlib (pip install matplotlib)")
+    scheme = _make_scheme(args)
+    model, notes = _load_model(args)
+    dof = args.dof if args.dof is not None else model.scene["plot_dof"]
+    if dof not in model.dofs:
+        raise _Usage("--dof", f"unknown DOF {dof!r} in scene {model.scene['name']!r} (DOFs: {', '.join(model.dofs)})")
+    dt = args.dt if args.dt is not None else model.scene["dt"]
+    t_end = args.t_end if args.t_end is not None else model.scene["t_end"]
+    if dt is None:
+        raise _Usage("--dt", f"the scene {model.scene['name']!r} sets no dt; give --dt")
+    if t_end is None:
+        raise _Usage("--t-end", f"the scene {model.scene['name']!r} sets no t_end; give --t-end")
+    known = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement"}
+    try:
+        n_steps = _core.steps_to_reach(0.0, t_end, dt)
+    except (ValueError, OverflowError) as exc:
+        arg, msg = _named(str(exc), known)
+        raise _Usage(arg or "--dt", msg) from None
+    save_every = args.save_every if args.save_every is not None else max(1, math.ceil(n_steps / MAX_SAVED))
+
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
+    show = args.progress if args.progress is not None else _isatty(sys.stderr)
+    bar = ProgressBar(sys.stderr, enabled=show)
+    t0 = time.perf_counter()
+    try:
+        res = solve(model, scheme, dt=dt, t_end=t_end, save_every=save_every, throw=False,
+                    max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy)
+    except KeyboardInterrupt:
+        bar.close(done=False)
+        print("nvib run: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, TypeError) as exc:
+        bar.close(done=False)
+        arg, msg = _named(str(exc), known)
+        raise _Usage(arg, msg) from None
+    elapsed = time.perf_counter() - t0
+    bar.close(done=res.status == "success")
+
+    _print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
+    code = 0
+    if args.out:
+        try:
+            extra = {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
+                     "without": np.array(list(args.without or []), dtype=str)}
+            if args.out.lower().endswith(".npz"):
+                write_npz(args.out, res, extra)
+            else:
+                write_csv(args.out, res)
+            print(f"wrote {args.out}")
+        except OSError as exc:
+            print(f"nvib run: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+    if args.plot:
+        from .plot import plot_run
+
+        try:
+            plot_run(res, model, dof, args.plot)
+            print(f"wrote {args.plot}")
+        except OSError as exc:
+            print(f"nvib run: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+    if res.status != "success":
+        print(f"nvib run: error: {_failure_line(res, scheme, dt)}", file=sys.stderr)
+        return 1
+    return code
+
+
+def _relative_balance_error(res) -> float:
+    import numpy as np
+
+    with np.errstate(all="ignore"):  # a run that blew up has inf energies: inf / inf
+        return res.energy.relative_balance_error()
+
+
+def _isatty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def _print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args) -> None:
+    s = model.scene
+    stats = res.stats.as_dict()
+    title = f"{s['name']}: {s['title']}" if s.get("title") else s["name"]
+    lines = [("scene", title)]
+    if args.without:
+        lines.append(("without", ", ".join(args.without)))
+    lines.append(("scheme", repr(scheme)))
+    saved = f"{len(res.t)} state{'s' if len(res.t) != 1 else ''} saved"
+    if save_every > 1:
+        saved += f" (every {save_every} steps)"
+    lines.append(("steps", f"{stats['num_steps']} of {res.num_steps_requested}, dt = {dt:g} s, "
+                           f"t_end = {t_end:g} s; {saved}"))
+    lines.append(("status", res.status))
+    lines.append(("wall time", f"{_seconds(elapsed)} (integrator loop {_seconds(stats['wall_time'])})"))
+    counters = [(k.removeprefix("num_"), v) for k, v in stats.items() if k not in ("wall_time", "num_steps")]
+    lines.append(("counters", ", ".join(f"{k} {v}" for k, v in counters)))
+    if len(res.t):
+        j = res.dofs.index(dof)
+        u, v, a = (float(x[-1, j]) + 0.0 for x in (res.u, res.v, res.a))  # + 0.0: no "-0"
+        lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g}, v = {v:.9g}, a = {a:.9g}"))
+    if res.energy is not None:
+        rel = _relative_balance_error(res)
+        lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D - W - E0| / max energy)"
+                      if math.isfinite(rel) else "relative balance error: n/a (the energies overflowed)"))
+    w = max(len(k) for k, _ in lines)
+    print("\n".join(f"{k:<{w}}  {v}" for k, v in lines))
+
+
+# ---------------------------------------------------------------- parser
+
+_RUN_EPILOG = """\
+schemes: lcdm/cd = central difference (leapfrog), cemdts = CEMDTS (default, eta = 0.45),
+zhai = Zhai (psi = phi = 1/2), newmark = Newmark (beta = 1/4, gamma = 1/2, Newton),
+galpha = generalized-alpha (alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2, or --rho-inf),
+pim = precise integration (squarings 20, order 2, 1 correction). Parameters accept
+fractions (--eta 1/12). Exit status: 0 success, 1 the run failed (diverged, Newton
+failed; partial --out/--plot still written), 2 bad input.
+
+examples:
+  nvib run hardening --scheme newmark --plot hardening.png
+  nvib run vehicle --without contact --dof z_w1 --energy --out vehicle.npz
+  nvib run building --scheme galpha --rho-inf 0.8 --dt 1e-3 --save-every 10 --out building.csv
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
 
     parser = argparse.ArgumentParser(prog="nvib", description="Time integration of nonlinear vibration systems.")
     parser.add_argument("--version", action="version", version=f"nvib {__version__}")
     parser.add_argument("--cmake-dir", action="store_true", help="print the folder of nvibConfig.cmake and exit")
     parser.add_argument("--include-dir", action="store_true", help="print the folder of the C++ headers and exit")
-    sub = parser.add_subparsers(dest="command")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    p = sub.add_parser("scenes", help="list the built-in scenes", description="List the built-in scenes.")
+    p.set_defaults(func=lambda args, parser: _scenes(args), subparser=p)
+
+    p = sub.add_parser("run", help="integrate a scene and summarise, save or plot the run",
+                       usage="%(prog)s SCENE [--scheme NAME] [scheme parameters] [--dt DT] [--t-end T] "
+                             "[--without NAME ...] [--dof NAME] [--energy] [--out FILE] [--plot PNG] [...]",
+                       description="Integrate a scene (a built-in name or a .toml file) with one scheme.",
+                       epilog=_RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", metavar="SCENE", help="built-in scene name (see nvib scenes) or path to a .toml scene")
+    g = p.add_argument_group("scheme")
+    g.add_argument("--scheme", choices=SCHEME_CHOICES, default="cemdts", help="time-stepping scheme (default cemdts)")
+    g.add_argument("--velocity", choices=("synchronized", "half_step"),
+                   help="lcdm/cd: velocity carried and reported (default synchronized)")
+    g.add_argument("--eta", type=_real, help="cemdts: eta (default 0.45)")
+    g.add_argument("--psi", type=_real, help="zhai: psi (default 1/2)")
+    g.add_argument("--phi", type=_real, help="zhai: phi (default 1/2)")
+    g.add_argument("--beta", type=_real, help="newmark/galpha: beta (default 1/4)")
+    g.add_argument("--gamma", type=_real, help="newmark/galpha: gamma (default 1/2)")
+    g.add_argument("--alpha-m", type=_real, help="galpha: alpha_m (default 1/2)")
+    g.add_argument("--alpha-f", type=_real, help="galpha: alpha_f (default 1/2)")
+    g.add_argument("--rho-inf", type=_real, metavar="R",
+                   help="galpha: spectral radius at infinity; sets alpha_m, alpha_f, beta, gamma")
+    g.add_argument("--iteration", choices=("newton", "modified", "none"),
+                   help="newmark/galpha: equilibrium iteration (default newton)")
+    g.add_argument("--squarings", type=_int, help="pim: 2^N squarings of the exponential (default 20)")
+    g.add_argument("--order", type=_int, help="pim: interpolation order of the load term (default 2)")
+    g.add_argument("--corrections", type=_int, help="pim: corrector passes (default 1)")
+    g = p.add_argument_group("run")
+    g.add_argument("--dt", type=_positive_real, help="time step [s] (default: the scene's)")
+    g.add_argument("--t-end", type=_positive_real, metavar="T", help="end time [s] (default: the scene's)")
+    g.add_argument("--save-every", type=_positive_int, metavar="K",
+                   help=f"save every K-th step (default 1, or more to keep at most {MAX_SAVED} states)")
+    g.add_argument("--without", nargs="+", action="extend", metavar="NAME",
+                   help="leave out effects by name or type (repeatable)")
+    g.add_argument("--max-displacement", type=_positive_real, metavar="U",
+                   help="stop as diverged once some |u_i| exceeds U (default: only non-finite states)")
+    g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
+    g.add_argument("--energy", action="store_true", help="record the energy balance")
+    g = p.add_argument_group("output")
+    g.add_argument("--out", metavar="FILE", help="write the history to FILE.npz or FILE.csv")
+    g.add_argument("--plot", metavar="PNG", help="write histories, phase locus (and energy) to this PNG")
+    g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar on stderr for runs over a second (default: when stderr is a terminal)")
+    p.set_defaults(func=_run, subparser=p)
+
     p = sub.add_parser("demo", help="hardening oscillator with every scheme against its closed form")
     p.add_argument("--dt", type=float, default=1e-3, help="time step [s] (default 1e-3, the paper's)")
     p.add_argument("--repeats", type=int, default=5, help="timing repeats (the best is shown)")
     p.add_argument("--plot", metavar="PNG", help="write error histories and phase loci to this PNG")
-    p.set_defaults(func=_demo)
+    p.set_defaults(func=lambda args, parser: _demo(args), subparser=p)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    from . import cmake_dir, include_dir
+
+    parser = build_parser()
     args = parser.parse_args(argv)
     if args.cmake_dir:
         print(cmake_dir())
@@ -45,7 +547,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     if args.command == "demo" and not (args.dt > 0):
         parser.error("--dt must be > 0")
-    return args.func(args)
+    return args.func(args, args.subparser)  # usage errors then read "nvib run: error: ..."
 
 
 if __name__ == "__main__":

@@ -57,6 +57,34 @@ inline std::int64_t steps_to_reach(double t0, double t_end, double dt) {
   return static_cast<std::int64_t>(std::ceil(r));
 }
 
+// Names the first offending quantity: u beyond the bound or non-finite, then v, then a.
+template <class Stepper>
+Failure divergence(const Stepper& st, std::int64_t step, double bound) {
+  Failure f;
+  f.status = Status::diverged;
+  f.step = step;
+  f.t = st.time();
+  const char* what = "u";
+  double value = 0.0;
+  const Vector* vecs[3] = {&st.u(), &st.v(), &st.a()};
+  const char* names[3] = {"u", "v", "a"};
+  for (int q = 0; q < 3 && f.dof < 0; ++q)
+    for (Index d = 0; d < vecs[q]->size(); ++d) {
+      const double x = (*vecs[q])[d];
+      if (!std::isfinite(x) || (q == 0 && !(std::abs(x) <= bound))) {
+        f.dof = d;
+        what = names[q];
+        value = x;
+        break;
+      }
+    }
+  const bool beyond = std::isfinite(value);
+  f.message = "diverged at t = " + detail::fmt(f.t) + " (step " + std::to_string(step) + "): " + what + "[" +
+              std::to_string(f.dof) + "] = " + detail::fmt(value) +
+              (beyond ? " beyond the bound " + detail::fmt(bound) : std::string(", not finite"));
+  return f;
+}
+
 struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
@@ -133,20 +161,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     Status s = st.step();
     if (s == Status::success) {
       const auto& u = st.u();
-      if (!((u.array().abs() <= bound).all() && st.v().allFinite())) {
-        Failure f;
-        f.status = Status::diverged;
-        f.step = i;
-        f.t = st.time();
-        for (Index d = 0; d < n; ++d)
-          if (!(std::abs(u[d]) <= bound) || !std::isfinite(st.v()[d])) {
-            f.dof = d;
-            break;
-          }
-        f.message = "diverged at t = " + detail::fmt(f.t) + " (step " + std::to_string(i) + "): u[" +
-                    std::to_string(f.dof) + "] = " + detail::fmt(u[f.dof]) +
-                    (std::isfinite(bound) ? " beyond the bound " + detail::fmt(bound) : std::string());
-        res.failure = f;
+      if (!((u.array().abs() <= bound).all() && st.v().allFinite() && st.a().allFinite())) {
+        res.failure = divergence(st, i, bound);
         s = Status::diverged;
       }
     } else {
