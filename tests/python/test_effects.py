@@ -137,6 +137,98 @@ def test_combined_effects_add_up():
         np.testing.assert_allclose(model.tangent_matrices(u, v, t)[0], Ks, rtol=1e-12, atol=1e-12 * np.abs(Ks).max())
 
 
+# Measures of every shape the evaluation stores differently: d = u_i, d = u_i - u_j,
+# any two coefficients, one entry with another coefficient, a sparse list
+# (fewer than half the DOFs) and a dense row (at least half).
+WIDE_DOFS = [f"q{i}" for i in range(8)]
+MEASURE_SHAPES = {
+    "unit": {"q2": 1.0},
+    "difference": {"q5": 1.0, "q1": -1.0},
+    "difference_reversed": {"q1": -1.0, "q5": 1.0},
+    "two": {"q0": 0.7, "q6": -1.3},
+    "one_scaled": {"q3": -2.0},
+    "sparse": {"q0": 0.4, "q4": -1.1, "q7": 0.9},
+    "dense": {f"q{i}": 0.1 * (i + 1) * (-1) ** i for i in range(6)},
+}
+
+
+def _row(measure):
+    g = np.zeros(len(WIDE_DOFS))
+    for dof, c in measure.items():
+        g[WIDE_DOFS.index(dof)] += c
+    return g
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_every_measure_storage_matches_the_laws(seed):
+    """Random mixtures of every law on every measure shape: the force is the sum of
+    g^T f(g.u, g.v, t) computed in NumPy, and the tangent matches finite differences."""
+    rng = np.random.default_rng(100 + seed)
+    shapes = list(MEASURE_SHAPES)
+    chosen = [LAWS[i] for i in rng.choice(len(LAWS), size=10)]
+    effects, reference = [], []
+    for law_id, params, law in chosen:
+        if law_id.startswith(("hertz", "power_damper")):
+            continue  # kinks: covered one by one above
+        measure = MEASURE_SHAPES[shapes[rng.integers(len(shapes))]]
+        effects.append(dict(params, measure=measure))
+        reference.append((_row(measure), law))
+    if seed % 2 == 0:  # with and without a ground acceleration (a dense load evaluated first)
+        effects.append({"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 2.0, "omega": 1.5}})
+    mass = rng.uniform(0.5, 3.0, len(WIDE_DOFS))
+    model = nvib.Model(mass, effects=effects, dofs=WIDE_DOFS)
+    for _ in range(5):
+        u, v, t = rng.normal(0, 0.3, 8), rng.normal(0, 2.0, 8), rng.uniform(0, 7)
+        expected = sum(g * law(g @ u, g @ v, t) for g, law in reference)
+        if seed % 2 == 0:
+            expected = expected + mass * 2.0 * math.sin(1.5 * t)  # -P = M r a_g
+        got = model.evaluate_force(u, v, t)
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(expected).max()))
+        K, C = model.tangent_matrices(u, v, t)
+        Kfd, Cfd = fd_tangent(model, u, v, t)
+        scale = max(1.0, np.abs(Kfd).max(), np.abs(Cfd).max())
+        np.testing.assert_allclose(K, Kfd, rtol=1e-6, atol=1e-7 * scale)
+        np.testing.assert_allclose(C, Cfd, rtol=1e-6, atol=1e-7 * scale)
+
+
+def test_several_dense_loads_add_up():
+    """Two dense harmonic loads, a ground acceleration and a constant load: every one counts
+    (only the first dense load may write the force vector, the others add to it)."""
+    dense = MEASURE_SHAPES["dense"]
+    g = _row(dense)
+    mass = np.linspace(1.0, 2.0, 8)
+    model = nvib.Model(mass, dofs=WIDE_DOFS, effects=[
+        {"type": "harmonic_force", "measure": dense, "amplitude": 3.0, "omega": 2.0},
+        {"type": "constant_force", "measure": {"q7": 1.0}, "value": 1.5},
+        {"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 2.0, "omega": 1.5}},
+        {"type": "harmonic_force", "measure": dense, "amplitude": -0.5, "omega": 0.3, "phase": 1.0},
+    ])
+    for t in (0.0, 0.4, 2.9):
+        expected = (-3.0 * math.sin(2.0 * t) + 0.5 * math.sin(0.3 * t + 1.0)) * g + mass * 2.0 * math.sin(1.5 * t)
+        expected[7] -= 1.5
+        np.testing.assert_allclose(model.evaluate_force(np.zeros(8), np.zeros(8), t), expected, rtol=1e-13, atol=1e-13)
+
+
+@pytest.mark.parametrize("shape", list(MEASURE_SHAPES))
+def test_hertz_contact_on_every_measure_storage(shape):
+    """An open contact adds exactly nothing whatever the storage of its measure."""
+    measure = MEASURE_SHAPES[shape]
+    g = _row(measure)
+    model = nvib.Model(np.ones(8), effects=[{"type": "hertz_contact", "measure": measure, "G": 1e-3},
+                                            {"type": "constant_force", "measure": {"q7": 1.0}, "value": 2.5}],
+                       dofs=WIDE_DOFS)
+    rng = np.random.default_rng(len(shape))
+    for _ in range(20):
+        u = rng.normal(0, 0.3, 8)
+        d = g @ u
+        expected = g * ((d / 1e-3) ** 1.5 if d > 0 else 0.0)
+        expected[7] -= 2.5
+        got = model.evaluate_force(u, np.zeros(8), 0.0)
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+        if d <= 0:
+            assert np.array_equal(got, expected)  # exactly: the open contact contributes no rounding
+
+
 def test_measure_by_index_and_repeated_dof():
     # DOFs may be named or given by index; a DOF named twice adds its coefficients
     m = nvib.Model([1.0, 1.0], effects=[{"type": "hardening_spring", "measure": {"u0": 1.0, 0: 2.0, 1: -1.0},

@@ -20,6 +20,8 @@ class Mass {
     out.diag_ = true;
     out.d_ = m;
     out.dinv_ = m.cwiseInverse();
+    out.ndinv_ = -out.dinv_;
+    out.llt_.compute(Matrix());  // a defined (empty) factorisation, so copies copy defined state
     return out;
   }
 
@@ -70,6 +72,20 @@ class Mass {
       llt_.solveInPlace(x);
   }
 
+  // x <- -M^{-1} x (one pass for a lumped mass: the explicit schemes' acceleration)
+  template <class Out>
+  void solve_negated_in_place(Eigen::MatrixBase<Out> const& x_) const {
+    auto& x = const_cast<Eigen::MatrixBase<Out>&>(x_);
+    if (diag_) {
+      double* p = x.derived().data();
+      const double* w = ndinv_.data();
+      for (Index i = 0, n = ndinv_.size(); i < n; ++i) p[i] *= w[i];
+    } else {
+      llt_.solveInPlace(x);
+      x = -x;
+    }
+  }
+
   // S += c M
   void add_to(MatRef S, double c) const {
     if (diag_)
@@ -80,7 +96,7 @@ class Mass {
 
  private:
   bool diag_ = true;
-  Vector d_, dinv_;
+  Vector d_, dinv_, ndinv_;
   Matrix M_;
   Eigen::LLT<Matrix> llt_;
 };

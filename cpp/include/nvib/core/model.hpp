@@ -139,8 +139,7 @@ class Model {
   // a = -M^{-1} (K u + C v + f(u, v, t))
   void acceleration(const CVecRef& u, const CVecRef& v, double t, VecRef a, Stats& st) {
     force(u, v, t, a, st);
-    a = -a;
-    mass_.solve_in_place(a);
+    mass_.solve_negated_in_place(a);
   }
 
   // ---- energy accounting ----
