@@ -3,6 +3,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -85,6 +86,38 @@ Failure divergence(const Stepper& st, std::int64_t step, double bound) {
   return f;
 }
 
+// Integer tests on the bits of the state, with no floating-point dependency
+// chain: a double is not finite exactly when its exponent bits are all ones,
+// and the bits of non-negative doubles (NaN above +inf) order like the numbers.
+namespace detail {
+constexpr std::uint64_t kExpBits = 0x7FF0000000000000ull, kAbsBits = 0x7FFFFFFFFFFFFFFFull;
+constexpr std::uint64_t kExpOne = 0x0010000000000000ull;  // all-ones exponent + this sets bit 63
+inline std::uint64_t bits_of(double x) {
+  std::uint64_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+// Bit 63 set when some entry is not finite.
+inline std::uint64_t nonfinite_bits(const Vector& x) {
+  std::uint64_t bad = 0;
+  const double* p = x.data();
+  for (Index i = 0, n = x.size(); i < n; ++i) bad |= (bits_of(p[i]) & kExpBits) + kExpOne;
+  return bad;
+}
+}  // namespace detail
+
+// Every |u_i| <= bound and finite.
+inline bool displacement_ok(const Vector& u, double bound) {
+  std::uint64_t umax = 0;
+  const double* p = u.data();
+  for (Index i = 0, n = u.size(); i < n; ++i) umax = std::max(umax, detail::bits_of(p[i]) & detail::kAbsBits);
+  return umax <= detail::bits_of(bound) && umax < detail::kExpBits;
+}
+// Every entry of v and a finite.
+inline bool rates_ok(const Vector& v, const Vector& a) {
+  return !((detail::nonfinite_bits(v) | detail::nonfinite_bits(a)) >> 63);
+}
+
 struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
@@ -96,7 +129,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   const Index n = st.size();
   detail::require(opt.save_every >= 1, "save_every: must be >= 1, got " + std::to_string(opt.save_every));
   detail::require(opt.observe_every >= 1, "observe_every: must be >= 1");
-  detail::require(!(opt.max_displacement <= 0.0), "max_displacement: must be > 0");
+  detail::require(opt.max_displacement > 0.0, "max_displacement: must be > 0 (infinity for no bound)");
   for (Index d : opt.dofs)
     detail::require(d >= 0 && d < n, "dofs: index " + std::to_string(d) + " is out of range for " +
                                          std::to_string(n) + " degrees of freedom");
@@ -134,13 +167,26 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     e0 = model.kinetic(st.v()) + model.potential(st.u(), st.time());
   }
   Index row = 0;
+  const bool all_dofs = opt.dofs.empty();
   auto save = [&]() {
     res.t[row] = st.time();
-    for (Index j = 0; j < m; ++j) {
-      const Index d = res.dofs[static_cast<size_t>(j)];
-      res.u(row, j) = st.u()[d];
-      res.v(row, j) = st.v()[d];
-      res.a(row, j) = st.a()[d];
+    double* pu = res.u.data() + row * m;  // rows are contiguous (row-major)
+    double* pv = res.v.data() + row * m;
+    double* pa = res.a.data() + row * m;
+    const double *su = st.u().data(), *sv = st.v().data(), *sa = st.a().data();
+    if (all_dofs) {
+      for (Index j = 0; j < m; ++j) {
+        pu[j] = su[j];
+        pv[j] = sv[j];
+        pa[j] = sa[j];
+      }
+    } else {
+      for (Index j = 0; j < m; ++j) {
+        const Index d = res.dofs[static_cast<size_t>(j)];
+        pu[j] = su[d];
+        pv[j] = sv[d];
+        pa[j] = sa[d];
+      }
     }
     if (opt.energy) {
       const double ek = model.kinetic(st.v()), ep = model.potential(st.u(), st.time());
@@ -157,11 +203,16 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
 
   const Stats before = st.stats();
   const double bound = opt.max_displacement;
+  // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
+  std::int64_t to_save = k, to_observe = opt.observe_every;
   for (std::int64_t i = 1; i <= nsteps; ++i) {
     Status s = st.step();
+    const bool saving = --to_save == 0 || i == nsteps;
     if (s == Status::success) {
-      const auto& u = st.u();
-      if (!((u.array().abs() <= bound).all() && st.v().allFinite() && st.a().allFinite())) {
+      // u every step; v and a where a state is saved. A non-finite v_n or a_n
+      // makes u_{n+1} non-finite in every scheme, so a run still stops within
+      // one step, and no saved row holds a non-finite value.
+      if (!displacement_ok(st.u(), bound) || (saving && !rates_ok(st.v(), st.a()))) {
         res.failure = divergence(st, i, bound);
         s = Status::diverged;
       }
@@ -179,8 +230,14 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       p_in = q_in;
       p_diss = q_diss;
     }
-    if (i % k == 0 || i == nsteps) save();
-    if (i % opt.observe_every == 0) observe(i, nsteps);
+    if (saving) {
+      save();
+      to_save = k;
+    }
+    if (--to_observe == 0) {
+      observe(i, nsteps);
+      to_observe = opt.observe_every;
+    }
   }
   if (row < nsave) {
     res.t.conservativeResize(row);
