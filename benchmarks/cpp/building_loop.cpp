@@ -1,0 +1,213 @@
+// Hand-written reference loop for benchmarks/building.py: the building scene
+// (python/nvib/scenes/building.toml) integrated with plain arrays, no nvib,
+// no Eigen.
+//
+//   6 floors, m = 1e5 kg each; storey springs f = k0 (1 + a d^2) d on the
+//   drifts d1 = x1, d_i = x_i - x_{i-1} (k0 = 1e8 N/m, a = 10); ground
+//   acceleration a_g = 10 sin(pi t) applied as P = -M r a_g (r = 1):
+//       M x'' + F_s(x) = -M r a_g(t),   x(0) = x'(0) = 0.
+//
+// Schemes (the formulas of nvib's headers, written out by hand):
+//   cd      synchronized leapfrog central difference
+//             u += h v + h^2/2 a;  a_new = acc(u, t+h);  v += h/2 (a + a_new)
+//   cemdts  CEMDTS(eta):
+//             u_{n+1} = u_n + h v_n + h^2 [(1/2 + eta) a_n - eta a_{n-1}]
+//             a_{n+1} = acc(u_{n+1}, t_{n+1})
+//             v_{n+1} = v_n + h [(1/2 - eta) a_{n+1} + (1/2 + 2 eta) a_n - eta a_{n-1}]
+//             a_{-1} = a_0
+//
+// The output (t, u, v, a of the saved states: steps 0, k, 2k, ... and the last
+// one, the rows nvib's solve() returns) is allocated before the loop and
+// filled in place. "best" reuses one preallocated output for every run (no
+// page faults); "best_fresh" allocates it inside every timed run, as
+// nvib::solve() does (fresh memory from the OS faults in on first touch).
+//
+// Usage: building_loop DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]
+// Prints one JSON object per (scheme, save_every) line: the best and median
+// wall time of REPEATS runs, the best with fresh output, and the final state
+// (so the work cannot be optimised away, and so the caller can compare with
+// nvib).
+//
+// Build: g++ -std=c++17 -O3 -DNDEBUG building_loop.cpp -o building_loop
+// (the flags of nvib's Release wheel: no -march=native).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr int N = 6;
+constexpr double MASS = 1e5, K0 = 1e8, HARD = 10.0;
+constexpr double AG_AMP = 10.0, AG_OMEGA = 3.141592653589793;
+
+// a = M^{-1} (-F_s(u)) - r a_g(t)
+inline void acc(const double* u, double t, double* a) {
+  double f[N + 1];
+  double prev = 0.0;
+  for (int i = 0; i < N; ++i) {
+    const double d = u[i] - prev;  // drift of storey i+1
+    f[i] = K0 * (1.0 + HARD * d * d) * d;
+    prev = u[i];
+  }
+  f[N] = 0.0;  // no storey above the roof
+  const double ag = AG_AMP * std::sin(AG_OMEGA * t);
+  for (int i = 0; i < N; ++i) a[i] = -(f[i] - f[i + 1]) / MASS - ag;
+}
+
+struct Output {
+  std::unique_ptr<double[]> t, u, v, a;
+  std::int64_t rows = 0;
+};
+
+struct State {
+  double u[N], v[N], a[N];
+};
+
+inline void save(Output& out, std::int64_t& row, double t, const State& s) {
+  out.t[row] = t;
+  double* pu = out.u.get() + row * N;
+  double* pv = out.v.get() + row * N;
+  double* pa = out.a.get() + row * N;
+  for (int i = 0; i < N; ++i) {
+    pu[i] = s.u[i];
+    pv[i] = s.v[i];
+    pa[i] = s.a[i];
+  }
+  ++row;
+}
+
+Output allocate(std::int64_t nsteps, std::int64_t k) {
+  Output out;
+  out.rows = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
+  out.t.reset(new double[out.rows]);
+  out.u.reset(new double[out.rows * N]);
+  out.v.reset(new double[out.rows * N]);
+  out.a.reset(new double[out.rows * N]);
+  return out;
+}
+
+// One run of the central difference; returns the final state.
+State run_cd(double h, std::int64_t nsteps, std::int64_t k, Output& out) {
+  State s{};
+  acc(s.u, 0.0, s.a);
+  std::int64_t row = 0;
+  save(out, row, 0.0, s);
+  const double hh2 = 0.5 * h * h, h2 = 0.5 * h;
+  double anew[N];
+  for (std::int64_t n = 1; n <= nsteps; ++n) {
+    const double t = static_cast<double>(n) * h;
+    for (int i = 0; i < N; ++i) s.u[i] += h * s.v[i] + hh2 * s.a[i];
+    acc(s.u, t, anew);
+    for (int i = 0; i < N; ++i) {
+      s.v[i] += h2 * (s.a[i] + anew[i]);
+      s.a[i] = anew[i];
+    }
+    if (n % k == 0 || n == nsteps) save(out, row, t, s);
+  }
+  return s;
+}
+
+// One run of CEMDTS(eta); returns the final state.
+State run_cemdts(double h, double eta, std::int64_t nsteps, std::int64_t k, Output& out) {
+  State s{};
+  acc(s.u, 0.0, s.a);
+  double aprev[N], anew[N];
+  for (int i = 0; i < N; ++i) aprev[i] = s.a[i];  // a_{-1} = a_0
+  std::int64_t row = 0;
+  save(out, row, 0.0, s);
+  const double hh = h * h;
+  const double cu1 = (0.5 + eta) * hh, cu2 = eta * hh;
+  const double cv1 = (0.5 - eta) * h, cv2 = (0.5 + 2.0 * eta) * h, cv3 = eta * h;
+  for (std::int64_t n = 1; n <= nsteps; ++n) {
+    const double t = static_cast<double>(n) * h;
+    for (int i = 0; i < N; ++i) s.u[i] += h * s.v[i] + cu1 * s.a[i] - cu2 * aprev[i];
+    acc(s.u, t, anew);
+    for (int i = 0; i < N; ++i) {
+      s.v[i] += cv1 * anew[i] + cv2 * s.a[i] - cv3 * aprev[i];
+      aprev[i] = s.a[i];
+      s.a[i] = anew[i];
+    }
+    if (n % k == 0 || n == nsteps) save(out, row, t, s);
+  }
+  return s;
+}
+
+void print_vec(const char* name, const double* x) {
+  std::printf("\"%s\": [", name);
+  for (int i = 0; i < N; ++i) std::printf("%s%.17g", i ? ", " : "", x[i]);
+  std::printf("]");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 6) {
+    std::fprintf(stderr, "usage: %s DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]\n", argv[0]);
+    return 2;
+  }
+  const double h = std::atof(argv[1]), t_end = std::atof(argv[2]);
+  const int repeats = std::atoi(argv[3]);
+  const double eta = std::atof(argv[4]);
+  const std::int64_t nsteps = std::llround(t_end / h);
+  using clock = std::chrono::steady_clock;
+
+  for (int scheme = 0; scheme < 2; ++scheme) {
+    for (int arg = 5; arg < argc; ++arg) {
+      const std::int64_t k = std::atoll(argv[arg]);
+      // reuse: one preallocated output, warmed by an untimed run, filled again by every timed run.
+      // fresh: the output allocated in every timed run (inside the timing, page faults included).
+      std::vector<double> times, fresh;
+      State last{};
+      double checksum = 0.0;
+      std::int64_t rows = 0;
+      auto run = [&](Output& out) {
+        return scheme == 0 ? run_cd(h, nsteps, k, out) : run_cemdts(h, eta, nsteps, k, out);
+      };
+      Output kept = allocate(nsteps, k);
+      last = run(kept);
+      for (int r = 0; r < repeats; ++r) {
+        const auto t0 = clock::now();
+        last = run(kept);
+        const auto t1 = clock::now();
+        times.push_back(std::chrono::duration<double>(t1 - t0).count());
+      }
+      // Read the saved history outside the timed region so it is observable.
+      for (std::int64_t j = 0; j < kept.rows * N; j += 97) checksum += kept.u[j];
+      rows = kept.rows;
+      for (int r = 0; r < repeats; ++r) {
+        const auto t0 = clock::now();
+        Output out = allocate(nsteps, k);
+        const State s = run(out);
+        const auto t1 = clock::now();
+        fresh.push_back(std::chrono::duration<double>(t1 - t0).count());
+        double c = 0.0;
+        for (std::int64_t j = 0; j < out.rows * N; j += 97) c += out.u[j];
+        if (c != checksum || s.u[0] != last.u[0]) {
+          std::fprintf(stderr, "fresh and reused runs differ\n");
+          return 1;
+        }
+      }
+      std::sort(times.begin(), times.end());
+      std::sort(fresh.begin(), fresh.end());
+      std::printf("{\"scheme\": \"%s\", \"save_every\": %lld, \"steps\": %lld, \"saved\": %lld, \"repeats\": %d, "
+                  "\"best\": %.9g, \"median\": %.9g, \"best_fresh\": %.9g, \"checksum\": %.17g, ",
+                  scheme == 0 ? "cd" : "cemdts", static_cast<long long>(k), static_cast<long long>(nsteps),
+                  static_cast<long long>(rows), repeats, times.front(), times[times.size() / 2], fresh.front(),
+                  checksum);
+      print_vec("u", last.u);
+      std::printf(", ");
+      print_vec("v", last.v);
+      std::printf(", ");
+      print_vec("a", last.a);
+      std::printf("}\n");
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
