@@ -7,7 +7,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CEMDTS', 'CallableModel', 'CentralDifference', 'Effect', 'EffectModel', 'GeneralizedAlpha', 'Newmark', 'PreciseIntegration', 'Stats', 'Stepper', 'Zhai', 'expm', 'make_stepper', 'steps_to_reach']
+__all__: list[str] = ['CEMDTS', 'CentralDifference', 'Effect', 'EffectModel', 'GeneralizedAlpha', 'HybridModel', 'Newmark', 'PreciseIntegration', 'Stats', 'Stepper', 'Zhai', 'expm', 'make_stepper', 'steps_to_reach']
 class Stats:
     def __init__(self) -> None:
         ...
@@ -219,34 +219,6 @@ class PreciseIntegration:
     @property
     def squarings(self) -> int:
         ...
-class CallableModel:
-    def __init__(self, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], K: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], C: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], force: typing.Any, tangent: typing.Any, uses_velocity: bool, uses_time: bool) -> None:
-        ...
-    def force(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        ...
-    def tangent(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
-        ...
-    @property
-    def C(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def is_linear(self) -> bool:
-        ...
-    @property
-    def mass_matrix(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def size(self) -> int:
-        ...
-    @property
-    def uses_time(self) -> bool:
-        ...
-    @property
-    def uses_velocity(self) -> bool:
-        ...
 class Effect:
     def __init__(self, type: str, index: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], coef: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], p0: typing.SupportsFloat | typing.SupportsIndex = 0.0, p1: typing.SupportsFloat | typing.SupportsIndex = 0.0, p2: typing.SupportsFloat | typing.SupportsIndex = 0.0, *, name: str = '', signal: str = 'none', amplitude: typing.SupportsFloat | typing.SupportsIndex = 0.0, omega: typing.SupportsFloat | typing.SupportsIndex = 0.0, phase: typing.SupportsFloat | typing.SupportsIndex = 0.0, t: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = [], values: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = []) -> None:
         ...
@@ -279,6 +251,9 @@ class Effect:
     def uses_velocity(self) -> bool:
         ...
 class EffectModel:
+    """
+    declared effects only: no Python in the loop
+    """
     def __init__(self, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], effects: collections.abc.Sequence[Effect], K: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], C: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
         ...
     def force(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
@@ -294,6 +269,53 @@ class EffectModel:
         ...
     @property
     def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @property
+    def accounts_energy(self) -> bool:
+        ...
+    @property
+    def effects(self) -> list[Effect]:
+        ...
+    @property
+    def is_linear(self) -> bool:
+        ...
+    @property
+    def mass_matrix(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @property
+    def num_evaluated_effects(self) -> int:
+        ...
+    @property
+    def size(self) -> int:
+        ...
+    @property
+    def uses_time(self) -> bool:
+        ...
+    @property
+    def uses_velocity(self) -> bool:
+        ...
+class HybridModel:
+    """
+    declared effects plus a Python force callable (the GIL is kept)
+    """
+    def __init__(self, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], effects: collections.abc.Sequence[Effect], K: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], C: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], force: typing.Any, tangent: typing.Any, uses_velocity: bool, uses_time: bool, laws: collections.abc.Sequence[tuple[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], typing.Any, typing.Any, str, bool, bool]] = []) -> None:
+        ...
+    def force(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
+        ...
+    def kinetic(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> float:
+        ...
+    def potential(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> float:
+        ...
+    def tangent(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
+        ...
+    @property
+    def C(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @property
+    def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+        ...
+    @property
+    def accounts_energy(self) -> bool:
         ...
     @property
     def effects(self) -> list[Effect]:
@@ -361,22 +383,22 @@ def expm(A: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], s
     Matrix exponential by the 2^N algorithm of the precise integration method.
     """
 @typing.overload
-def make_stepper(model: CallableModel, scheme: CentralDifference, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
+def make_stepper(model: HybridModel, scheme: CentralDifference, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
     ...
 @typing.overload
-def make_stepper(model: CallableModel, scheme: Zhai, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
+def make_stepper(model: HybridModel, scheme: Zhai, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
     ...
 @typing.overload
-def make_stepper(model: CallableModel, scheme: CEMDTS, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
+def make_stepper(model: HybridModel, scheme: CEMDTS, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
     ...
 @typing.overload
-def make_stepper(model: CallableModel, scheme: Newmark, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
+def make_stepper(model: HybridModel, scheme: Newmark, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
     ...
 @typing.overload
-def make_stepper(model: CallableModel, scheme: GeneralizedAlpha, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
+def make_stepper(model: HybridModel, scheme: GeneralizedAlpha, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
     ...
 @typing.overload
-def make_stepper(model: CallableModel, scheme: PreciseIntegration, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
+def make_stepper(model: HybridModel, scheme: PreciseIntegration, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
     ...
 @typing.overload
 def make_stepper(model: EffectModel, scheme: CentralDifference, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:

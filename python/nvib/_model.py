@@ -1,4 +1,4 @@
-"""The Python Model: a mass plus either declared effects or a force callable."""
+"""The Python Model: a mass plus declared effects (built-in or Python laws) and an optional force callable."""
 
 from __future__ import annotations
 
@@ -79,7 +79,7 @@ def _signal(where: str, spec) -> dict:
 
 
 class Model:
-    """M a + K u + C v + F(u, v, t) = 0 with F either declared effects or a callable.
+    """M a + K u + C v + F(u, v, t) = 0 with F the declared effects and an optional force callable.
 
     Parameters
     ----------
@@ -90,13 +90,17 @@ class Model:
     tangent : optional callable ``tangent(u, v, t) -> (K_t, C_t)`` (C_t may be
         None); without it, central finite differences are used and counted in
         ``stats.num_fd_force_evals``.
-    effects : optional list of built-in effects, each a dict such as
-        ``{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": 100, "a": 30}``;
-        they are evaluated in C++ with no Python in the loop.
+    effects : optional list of effects, each a dict such as
+        ``{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": 100, "a": 30}``.
+        Built-in effects are evaluated in C++ with no Python in the loop. A
+        Python law is an effect too: ``{"type": "callable", "measure": {...},
+        "law": f(d, dd, t) -> float, "tangent": optional (d, dd, t) -> (df/dd, df/ddd),
+        "uses_velocity": True, "uses_time": True, "name": ...}`` acts as g^T f on
+        its measure d = g . u. ``force`` may be given with ``effects``: both act.
     dofs : optional DOF names (used by effect measures and by ``solve(dofs=...)``).
     u0, v0 : initial state (zeros by default).
     uses_velocity, uses_time : declare that ``force`` does not depend on v or t,
-        so the schemes can skip what is not needed.
+        so the schemes can skip what is not needed (a callable effect declares its own).
     """
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
@@ -126,13 +130,13 @@ class Model:
             raise TypeError(f"tangent: expected a callable tangent(u, v, t) -> (K, C), got {type(tangent).__name__}")
         if tangent is not None and force is None:
             raise ValueError("tangent: given without a force")
-        if effects is not None and force is not None:
-            raise ValueError("effects, force: give either built-in effects or a force callable, not both")
         self.force = force
         self.tangent = tangent
         self.name = str(name)
         self.effects = None
+        self.python_laws: list[str] = []  # where each Python law sits ("effects[3]")
         self.without = tuple(without)
+        builtin, laws = [], []
         if effects is not None:
             effects = list(effects)
             known = {e.get("name") for e in effects if isinstance(e, dict)} | {
@@ -143,14 +147,56 @@ class Model:
                     types = sorted({str(e.get("type")) for e in effects if isinstance(e, dict) and e.get("type")})
                     raise ValueError(f"without: no effect named or typed {w!r} in this model "
                                      f"(names: {', '.join(names) or 'none'}; types: {', '.join(types)})")
-            kept = [(i, e) for i, e in enumerate(effects)
-                    if not (isinstance(e, dict) and (e.get("name") in self.without or e.get("type") in self.without))]
-            self.effects = [self._effect(i, e) for i, e in kept]
-            self._core = _core.EffectModel(m, self.effects, Km, Cm)
+            for i, e in enumerate(effects):
+                if isinstance(e, dict) and (e.get("name") in self.without or e.get("type") in self.without):
+                    continue
+                if isinstance(e, dict) and e.get("type") == "callable":
+                    laws.append(self._python_law(i, e))
+                else:
+                    builtin.append(self._effect(i, e))
+            self.effects = builtin
+            self.python_laws = [law[4] for law in laws]
         elif self.without:
             raise ValueError("without: only a model of declared effects can leave effects out")
+        if force is None and not laws:
+            self._core = _core.EffectModel(m, builtin, Km, Cm)
         else:
-            self._core = _core.CallableModel(m, Km, Cm, force, tangent, bool(uses_velocity), bool(uses_time))
+            # Python in the loop: the GIL is kept for the run.
+            self._core = _core.HybridModel(m, builtin, Km, Cm, force, tangent, bool(uses_velocity),
+                                           bool(uses_time), laws)
+
+    def _python_law(self, i: int, spec: dict):
+        """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},
+        "law": f(d, d', t) -> float, "tangent": optional (d, d', t) -> (df/dd, df/dd'),
+        "uses_velocity": True, "uses_time": True, "name": ""}."""
+        where = f"effects[{i}]"
+        allowed = {"type", "measure", "law", "tangent", "uses_velocity", "uses_time", "name", "note"}
+        for key in spec:
+            if key not in allowed:
+                raise ValueError(f"{where}.{key}: unknown key of a callable effect (expected "
+                                 f"{', '.join(sorted(allowed - {'type'}))})")
+        law = spec.get("law")
+        if not callable(law):
+            raise TypeError(f"{where}.law: expected a callable law(d, dd, t) -> float, got {type(law).__name__}")
+        tangent = spec.get("tangent")
+        if tangent is not None and not callable(tangent):
+            raise TypeError(f"{where}.tangent: expected a callable tangent(d, dd, t) -> (df/dd, df/ddd), "
+                            f"got {type(tangent).__name__}")
+        measure = spec.get("measure")
+        if not isinstance(measure, dict) or not measure:
+            raise ValueError(f"{where}.measure: expected a non-empty mapping DOF -> coefficient")
+        index = [self._dof_index(f"{where}.measure", k) for k in measure]
+        coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
+        flags = []
+        for key in ("uses_velocity", "uses_time"):
+            value = spec.get(key, True)
+            if not isinstance(value, bool):
+                raise TypeError(f"{where}.{key}: expected True or False, got {value!r}")
+            flags.append(value)
+        name = spec.get("name", "")
+        if not isinstance(name, str):
+            raise TypeError(f"{where}.name: expected a string")
+        return (index, coef, law, tangent, where, *flags)
 
     def _dof_index(self, where: str, key) -> int:
         if isinstance(key, numbers.Integral) and not isinstance(key, bool):
@@ -167,7 +213,8 @@ class Model:
             raise TypeError(f"{where}: expected a dict with 'type' and 'measure', got {type(spec).__name__}")
         kind = spec.get("type")
         if kind not in EFFECT_PARAMETERS:
-            raise ValueError(f"{where}.type: unknown effect type {kind!r} (known: {', '.join(EFFECT_PARAMETERS)})")
+            raise ValueError(f"{where}.type: unknown effect type {kind!r} "
+                             f"(known: {', '.join(EFFECT_PARAMETERS)}, callable)")
         if "measure" in spec:
             measure = spec["measure"]
             if not isinstance(measure, dict) or not measure:

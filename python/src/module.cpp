@@ -50,69 +50,130 @@ py::array_t<double> checked_array(const py::handle& obj, const char* who, Index 
   return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(arr);
 }
 
-struct PyForce {
-  py::object force = py::none();    // force(u, v, t) -> (n,) or None for no nonlinear force
-  py::object tangent_ = py::none();  // tangent(u, v, t) -> (K, C)
-  Index n = 0;
+// A scalar law given as a Python callable on a measure d = g . u:
+// law(d, d', t) -> f, acting as g^T f; tangent(d, d', t) -> (df/dd, df/dd') optional.
+struct PyLaw {
+  std::vector<Index> index;
+  std::vector<double> coef;
+  py::object law, tangent = py::none();
+  std::string where;  // "effects[3]", for error messages
   bool velocity = true, time = true;
+
+  double measure(const CVecRef& x) const {
+    double d = 0.0;
+    for (size_t k = 0; k < index.size(); ++k) d += coef[k] * x[index[k]];
+    return d;
+  }
+};
+
+// A real number returned by a callback (a Python number or a 0-d/1-element array).
+double checked_scalar(const py::handle& obj, const std::string& who, double t) {
+  auto arr = checked_array(obj, who.c_str(), 1, 1, t);
+  return arr.data()[0];
+}
+
+// All Python callables of a model: a vector force(u, v, t) and scalar laws on measures.
+struct PyForce {
+  py::object force = py::none();    // force(u, v, t) -> (n,) or None
+  py::object tangent_ = py::none();  // tangent(u, v, t) -> (K, C)
+  std::vector<PyLaw> laws;
+  Index n = 0;
+  bool velocity = true, time = true;  // of `force`
+
+  bool empty() const { return force.is_none() && laws.empty(); }
 
   void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
     if (force.is_none()) {
       out.setZero();
-      return;
+    } else {
+      py::object r = force(to_numpy(u), to_numpy(v), t);
+      auto arr = checked_array(r, "force", n, 1, t);
+      std::memcpy(out.data(), arr.data(), sizeof(double) * static_cast<size_t>(n));
+      if (!out.allFinite()) nonfinite(u, v, t, "force");
     }
-    py::object r = force(to_numpy(u), to_numpy(v), t);
-    auto arr = checked_array(r, "force", n, 1, t);
-    std::memcpy(out.data(), arr.data(), sizeof(double) * static_cast<size_t>(n));
-    if (!out.allFinite()) {
-      // Overflow of a diverging run is reported as divergence by the solver;
-      // a non-finite force at a moderate state is a bug in the callback.
-      const double scale = std::max(u.cwiseAbs().maxCoeff(), v.cwiseAbs().maxCoeff());
-      if (u.allFinite() && v.allFinite() && scale < 1e30)
-        throw py::value_error("force returned a non-finite value at t = " + detail::fmt(t) +
-                              " for a finite state (max |u|, |v| = " + detail::fmt(scale) + ")");
+    for (const PyLaw& l : laws) {
+      const double d = l.measure(u), dd = l.velocity ? l.measure(v) : 0.0;
+      const double f = checked_scalar(l.law(d, dd, t), l.where + ".law", t);
+      if (!std::isfinite(f)) nonfinite(u, v, t, l.where + ".law");
+      for (size_t k = 0; k < l.index.size(); ++k) out[l.index[k]] += l.coef[k] * f;
     }
   }
-  bool has_tangent() const { return force.is_none() || !tangent_.is_none(); }
+  // Overflow of a diverging run is reported as divergence by the solver; a
+  // non-finite value at a moderate state is a bug in the callback.
+  static void nonfinite(const CVecRef& u, const CVecRef& v, double t, const std::string& who) {
+    const double scale = std::max(u.cwiseAbs().maxCoeff(), v.cwiseAbs().maxCoeff());
+    if (u.allFinite() && v.allFinite() && scale < 1e30)
+      throw py::value_error(who + " returned a non-finite value at t = " + detail::fmt(t) +
+                            " for a finite state (max |u|, |v| = " + detail::fmt(scale) + ")");
+  }
+  bool has_tangent() const {
+    if (!force.is_none() && tangent_.is_none()) return false;
+    for (const PyLaw& l : laws)
+      if (l.tangent.is_none()) return false;
+    return true;
+  }
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
-    if (force.is_none()) {
-      K.setZero();
-      C.setZero();
-      return;
+    K.setZero();
+    C.setZero();
+    if (!force.is_none()) force_tangent(u, v, t, K, C);
+    for (const PyLaw& l : laws) {
+      const double d = l.measure(u), dd = l.velocity ? l.measure(v) : 0.0;
+      py::object r = l.tangent(d, dd, t);
+      py::tuple kc = as_pair(r, l.where + ".tangent");
+      const double kd = checked_scalar(kc[0], l.where + ".tangent (df/dd)", t);
+      const double cd = kc[1].is_none() ? 0.0 : checked_scalar(kc[1], l.where + ".tangent (df/dd')", t);
+      if (!std::isfinite(kd) || !std::isfinite(cd))
+        throw py::value_error(l.where + ".tangent returned non-finite values at t = " + detail::fmt(t));
+      for (size_t i = 0; i < l.index.size(); ++i)
+        for (size_t j = 0; j < l.index.size(); ++j) {
+          K(l.index[i], l.index[j]) += kd * l.coef[i] * l.coef[j];
+          C(l.index[i], l.index[j]) += cd * l.coef[i] * l.coef[j];
+        }
     }
-    py::object r = tangent_(to_numpy(u), to_numpy(v), t);
-    py::tuple kc;
-    try {
-      kc = r.cast<py::tuple>();
-    } catch (const py::cast_error&) {
-      throw py::type_error("tangent must return a tuple (K, C), got " +
+  }
+  static py::tuple as_pair(const py::object& r, const std::string& who) {
+    if (!py::isinstance<py::tuple>(r) && !py::isinstance<py::list>(r))
+      throw py::type_error(who + " must return a tuple (K, C), got " +
                            std::string(py::str(py::type::of(r).attr("__name__"))));
-    }
-    if (kc.size() != 2) throw py::type_error("tangent must return a tuple (K, C) of length 2");
+    py::tuple kc(r);
+    if (kc.size() != 2) throw py::type_error(who + " must return a tuple (K, C) of length 2");
+    return kc;
+  }
+  void force_tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
+    py::tuple kc = as_pair(tangent_(to_numpy(u), to_numpy(v), t), "tangent");
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     auto Ka = checked_array(kc[0], "tangent (K)", n, 2, t);
-    K = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(Ka.data(), n, n);
-    if (kc[1].is_none()) {
-      C.setZero();
-    } else {
+    K = Eigen::Map<const RowMajor>(Ka.data(), n, n);
+    if (!kc[1].is_none()) {
       auto Ca = checked_array(kc[1], "tangent (C)", n, 2, t);
-      C = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(Ca.data(), n, n);
+      C = Eigen::Map<const RowMajor>(Ca.data(), n, n);
     }
     if (!K.allFinite() || !C.allFinite())
       throw py::value_error("tangent returned non-finite values at t = " + detail::fmt(t));
   }
-  bool uses_velocity() const { return !force.is_none() && velocity; }
-  bool uses_time() const { return !force.is_none() && time; }
-  bool is_linear() const { return force.is_none(); }
-  // Energy: a model without a force callable is K, C and M only; the energy
-  // of a user callable is unknown.
-  bool accounts_energy() const { return force.is_none(); }
+  bool uses_velocity() const {
+    bool any = !force.is_none() && velocity;
+    for (const PyLaw& l : laws) any = any || l.velocity;
+    return any;
+  }
+  bool uses_time() const {
+    bool any = !force.is_none() && time;
+    for (const PyLaw& l : laws) any = any || l.time;
+    return any;
+  }
+  bool is_linear() const { return empty(); }
+  // Energy: the energy of a user callable is unknown.
+  bool accounts_energy() const { return empty(); }
   double potential(const CVecRef&, double) const { return 0.0; }
   double input_power(const CVecRef&, const CVecRef&, double) const { return 0.0; }
   double dissipated_power(const CVecRef&) const { return 0.0; }
 };
 
-using CallableModel = Model<PyForce>;
 using EffectModel = Model<effects::EffectSet>;
+using HybridModel = Model<effects::EffectsPlus<PyForce>>;
+
+const effects::EffectSet& effect_set(const EffectModel& md) { return md.nonlinear_force(); }
+const effects::EffectSet& effect_set(const HybridModel& md) { return md.nonlinear_force().effects(); }
 
 Mass make_mass(const py::array_t<double, py::array::c_style | py::array::forcecast>& m) {
   if (m.ndim() == 1) return Mass::diagonal(Eigen::Map<const Vector>(m.data(), m.shape(0)));
@@ -219,7 +280,7 @@ struct StepperImpl final : AnyStepper {
   template <class Scheme, class M>
   StepperImpl(const Scheme& scheme, const M& model, double dt) : s(scheme, model, dt), name(scheme.name()) {}
   // A model with Python callables keeps the GIL; a C++-only model releases it.
-  static constexpr bool releases_gil = !std::is_same_v<typename std::decay_t<decltype(std::declval<S&>().model())>, CallableModel>;
+  static constexpr bool releases_gil = !std::is_same_v<typename std::decay_t<decltype(std::declval<S&>().model())>, HybridModel>;
 
   void initialize(double t0, const Vector& u0, const Vector& v0) override { s.initialize(t0, u0, v0); }
   Status step() override { return s.step(); }
@@ -316,6 +377,28 @@ Vector force_of(M& md, const Vector& u, const Vector& v, double t) {
   Vector out(md.size());
   md.force(u, v, t, out, st);
   return out;
+}
+
+// What both model classes show to Python.
+template <class M>
+py::class_<M> def_model(py::module_& m, const char* name, const char* doc) {
+  py::class_<M> c(m, name, doc);
+  c.def_property_readonly("size", &M::size)
+      .def_property_readonly("uses_velocity", &M::uses_velocity)
+      .def_property_readonly("uses_time", &M::uses_time)
+      .def_property_readonly("is_linear", &M::is_linear)
+      .def_property_readonly("accounts_energy", &M::accounts_energy)
+      .def_property_readonly("num_evaluated_effects", [](const M& md) { return effect_set(md).evaluated().size(); })
+      .def_property_readonly("mass_matrix", [](const M& md) { return md.mass().matrix(); })
+      .def_property_readonly("K", [](const M& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); })
+      .def_property_readonly("C", [](const M& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); })
+      .def_property_readonly("effects", [](const M& md) { return effect_set(md).effects(); })
+      .def("potential", [](M& md, const Vector& u, double t) { return md.potential(u, t); }, py::arg("u"),
+           py::arg("t") = 0.0)
+      .def("kinetic", [](M& md, const Vector& v) { return md.kinetic(v); })
+      .def("force", &force_of<M>, py::arg("u"), py::arg("v"), py::arg("t"))
+      .def("tangent", &tangent_of<M>, py::arg("u"), py::arg("v"), py::arg("t"));
+  return c;
 }
 
 }  // namespace
@@ -474,30 +557,6 @@ PYBIND11_MODULE(_core, m) {
       .def("__repr__", &PreciseIntegration::name);
 
   // ---- models -----------------------------------------------------------------------
-  py::class_<CallableModel>(m, "CallableModel")
-      .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& mass, const Matrix& K, const Matrix& C,
-                       py::object force, py::object tangent, bool uses_velocity, bool uses_time) {
-             Mass ms = make_mass(mass);
-             PyForce f;
-             f.force = std::move(force);
-             f.tangent_ = std::move(tangent);
-             f.n = ms.size();
-             f.velocity = uses_velocity;
-             f.time = uses_time;
-             return CallableModel(std::move(ms), K, C, std::move(f));
-           }),
-           py::arg("mass"), py::arg("K"), py::arg("C"), py::arg("force"), py::arg("tangent"),
-           py::arg("uses_velocity"), py::arg("uses_time"))
-      .def_property_readonly("size", &CallableModel::size)
-      .def_property_readonly("uses_velocity", &CallableModel::uses_velocity)
-      .def_property_readonly("uses_time", &CallableModel::uses_time)
-      .def_property_readonly("is_linear", &CallableModel::is_linear)
-      .def_property_readonly("mass_matrix", [](const CallableModel& md) { return md.mass().matrix(); })
-      .def_property_readonly("K", [](const CallableModel& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); })
-      .def_property_readonly("C", [](const CallableModel& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); })
-      .def("force", &force_of<CallableModel>, py::arg("u"), py::arg("v"), py::arg("t"))
-      .def("tangent", &tangent_of<CallableModel>, py::arg("u"), py::arg("v"), py::arg("t"));
-
   py::class_<effects::Effect>(m, "Effect")
       .def(py::init([](const std::string& type, std::vector<Index> index, std::vector<double> coef, double p0,
                        double p1, double p2, const std::string& name, const std::string& signal,
@@ -530,27 +589,39 @@ PYBIND11_MODULE(_core, m) {
         return std::string("Effect(") + effects::to_string(e.law) + (e.name.empty() ? "" : ", name='" + e.name + "'") + ")";
       });
 
-  py::class_<EffectModel>(m, "EffectModel")
-      .def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& mass, std::vector<effects::Effect> list,
-                       const Matrix& K, const Matrix& C) {
-             return effects::make_effect_model(make_mass(mass), std::move(list), K, C);
-           }),
-           py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"))
-      .def_property_readonly("size", &EffectModel::size)
-      .def_property_readonly("uses_velocity", &EffectModel::uses_velocity)
-      .def_property_readonly("uses_time", &EffectModel::uses_time)
-      .def_property_readonly("is_linear", &EffectModel::is_linear)
-      .def_property_readonly("num_evaluated_effects",
-                             [](const EffectModel& md) { return md.nonlinear_force().evaluated().size(); })
-      .def_property_readonly("mass_matrix", [](const EffectModel& md) { return md.mass().matrix(); })
-      .def_property_readonly("K", [](const EffectModel& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); })
-      .def_property_readonly("C", [](const EffectModel& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); })
-      .def_property_readonly("effects", [](const EffectModel& md) { return md.nonlinear_force().effects(); })
-      .def("potential", [](EffectModel& md, const Vector& u, double t) { return md.potential(u, t); },
-           py::arg("u"), py::arg("t") = 0.0)
-      .def("kinetic", [](EffectModel& md, const Vector& v) { return md.kinetic(v); })
-      .def("force", &force_of<EffectModel>, py::arg("u"), py::arg("v"), py::arg("t"))
-      .def("tangent", &tangent_of<EffectModel>, py::arg("u"), py::arg("v"), py::arg("t"));
+  auto effect_model = def_model<EffectModel>(m, "EffectModel", "declared effects only: no Python in the loop");
+  effect_model.def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& mass,
+                               std::vector<effects::Effect> list, const Matrix& K, const Matrix& C) {
+                     return effects::make_effect_model(make_mass(mass), std::move(list), K, C);
+                   }),
+                   py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"));
+  auto hybrid_model = def_model<HybridModel>(m, "HybridModel",
+                                             "declared effects plus a Python force callable (the GIL is kept)");
+  // laws: (index, coef, law, tangent or None, where, uses_velocity, uses_time) per scalar Python law.
+  using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, py::object, std::string, bool, bool>;
+  hybrid_model.def(py::init([](const py::array_t<double, py::array::c_style | py::array::forcecast>& mass,
+                               std::vector<effects::Effect> list, const Matrix& K, const Matrix& C, py::object force,
+                               py::object tangent, bool uses_velocity, bool uses_time, std::vector<LawSpec> laws) {
+                     Mass ms = make_mass(mass);
+                     PyForce f;
+                     f.force = std::move(force);
+                     f.tangent_ = std::move(tangent);
+                     f.n = ms.size();
+                     f.velocity = uses_velocity;
+                     f.time = uses_time;
+                     for (auto& [index, coef, law, tan, where, vel, time] : laws) {
+                       if (index.size() != coef.size() || index.empty())
+                         throw py::value_error(where + ".measure: index and coef must be non-empty and equally long");
+                       for (Index i : index)
+                         if (i < 0 || i >= ms.size())
+                           throw py::value_error(where + ".measure: DOF index " + std::to_string(i) + " is out of range");
+                       f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time});
+                     }
+                     return effects::make_effect_model(std::move(ms), std::move(list), std::move(f), K, C);
+                   }),
+                   py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"), py::arg("force"),
+                   py::arg("tangent"), py::arg("uses_velocity"), py::arg("uses_time"),
+                   py::arg("laws") = std::vector<LawSpec>{});
 
   // ---- steppers ---------------------------------------------------------------------
   py::class_<AnyStepper>(m, "Stepper")
@@ -584,7 +655,7 @@ PYBIND11_MODULE(_core, m) {
           py::arg("max_displacement") = std::numeric_limits<double>::infinity(), py::arg("observe_every") = 4096,
           py::arg("observer") = py::none(), py::arg("energy") = false);
 
-  def_all_schemes<CallableModel>(m);
+  def_all_schemes<HybridModel>(m);
   def_all_schemes<EffectModel>(m);
 
   m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,

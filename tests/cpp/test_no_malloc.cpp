@@ -125,5 +125,19 @@ int main() {
   }
   fx.push_back(nvib::effects::harmonic_force({{0, 1.0}}, 10.0, 3.0));
   all_schemes("effects", nvib::effects::make_effect_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), fx));
+  // Every storage of a measure: a dense load written first, a sparse and a dense
+  // measure, two arbitrary coefficients; then the same effects plus a functor.
+  nvib::effects::Measure everywhere, dense, sparse;
+  for (nvib::Index i = 0; i < n; ++i) everywhere.emplace_back(i, 1.0);
+  for (nvib::Index i = 0; i < 8; ++i) dense.emplace_back(i, 0.1 * static_cast<double>(i + 1));
+  sparse = {{0, 0.5}, {5, -0.3}, {9, 0.2}};
+  fx.push_back(nvib::effects::ground_acceleration(everywhere, nvib::effects::Signal::sine(2.0, 1.5)));
+  fx.push_back(nvib::effects::hardening_spring(sparse, 50.0, 3.0));
+  fx.push_back(nvib::effects::cubic_spring(dense, 20.0));
+  fx.push_back(nvib::effects::hertz_contact({{3, 0.7}, {4, -0.2}}, 1e-3, 2.0));
+  fx.push_back(nvib::effects::constant_force({{2, 1.0}}, 3.0));
+  all_schemes("effects, every storage", nvib::effects::make_effect_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), fx));
+  all_schemes("effects plus a functor",
+              nvib::effects::make_effect_model(nvib::Mass::diagonal(nvib::Vector::Ones(n)), fx, Duffing{}));
   return nvib_test::finish("test_no_malloc");
 }

@@ -60,6 +60,49 @@ struct Hardening {
   bool uses_velocity() const { return false; }
 };
 
+// 100 (1 + 30 u^2) u + 0.1 v^3 on every DOF, with its tangent.
+struct Duffing {
+  void operator()(const nvib::CVecRef& u, const nvib::CVecRef& v, double, nvib::VecRef out) const {
+    for (Index i = 0; i < u.size(); ++i) out[i] = 100.0 * (1.0 + 30.0 * u[i] * u[i]) * u[i] + 0.1 * v[i] * v[i] * v[i];
+  }
+  void tangent(const nvib::CVecRef& u, const nvib::CVecRef& v, double, nvib::MatRef K, nvib::MatRef C) const {
+    K.setZero();
+    C.setZero();
+    for (Index i = 0; i < u.size(); ++i) {
+      K(i, i) = 100.0 * (1.0 + 90.0 * u[i] * u[i]);
+      C(i, i) = 0.3 * v[i] * v[i];
+    }
+  }
+};
+
+// Effects plus a C++ functor equal the same laws declared as effects.
+template <class Scheme>
+void check_effects_plus_functor(const Scheme& scheme) {
+  using namespace nvib::effects;
+  const Index n = 3;
+  std::vector<Effect> chain = {spring({{0, 1.0}}, 40.0), damper({{1, 1.0}, {0, -1.0}}, 0.4),
+                               cubic_spring({{2, 1.0}, {1, -1.0}}, 25.0),
+                               harmonic_force({{0, 1.0}, {2, 0.5}}, 3.0, 2.0)};
+  std::vector<Effect> declared = chain;
+  for (Index i = 0; i < n; ++i) {
+    declared.push_back(hardening_spring({{i, 1.0}}, 100.0, 30.0));
+    declared.push_back(power_damper({{i, 1.0}}, 0.1, 3.0));
+  }
+  const nvib::Mass mass = nvib::Mass::diagonal(Vector::LinSpaced(n, 1.0, 2.0));
+  const auto plus = make_effect_model(mass, chain, Duffing{});
+  const auto effects_only = make_effect_model(mass, declared);
+  CHECK(plus.uses_velocity() && plus.uses_time() && !plus.is_linear() && plus.has_analytic_tangent());
+  Vector u0(n), v0(n);
+  u0 << 0.3, -0.2, 0.1;
+  v0 << 0.0, 0.5, -0.4;
+  const auto a = nvib::solve(plus, scheme, 1e-3, 0.5, u0, v0);
+  const auto b = nvib::solve(effects_only, scheme, 1e-3, 0.5, u0, v0);
+  const double scale = b.u.cwiseAbs().maxCoeff();
+  CHECK((a.u - b.u).cwiseAbs().maxCoeff() <= 1e-12 * scale);
+  CHECK(a.stats.num_force_evals == b.stats.num_force_evals);
+  CHECK(a.stats.num_fd_force_evals == 0);
+}
+
 template <class Fn>
 bool throws_invalid(Fn&& fn) {
   try {
@@ -149,6 +192,12 @@ int main() {
     M << 1, 2, 2, 1;  // symmetric, indefinite
     nvib::Mass::dense(M);
   }));
+  check_effects_plus_functor(nvib::CentralDifference());
+  check_effects_plus_functor(nvib::CEMDTS(0.45));
+  check_effects_plus_functor(nvib::Newmark());
+  check_effects_plus_functor(nvib::GeneralizedAlpha::from_rho_inf(0.8));
+  check_effects_plus_functor(nvib::PreciseIntegration());
+
   CHECK(nvib::steps_to_reach(0.0, 0.3, 1e-3) == 300);
   CHECK(nvib::steps_to_reach(0.0, 1.0, 0.3) == 4);
   return nvib_test::finish("test_schemes");

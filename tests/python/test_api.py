@@ -141,8 +141,14 @@ def test_model_argument_errors():
         nvib.Model([1.0], force=3.0)
     with pytest.raises(ValueError, match=r"^tangent\b"):
         nvib.Model([1.0], tangent=lambda u, v, t: (None, None))
-    with pytest.raises(ValueError, match=r"effects, force"):
-        nvib.Model([1.0], force=lambda u, v, t: u, effects=[])
+
+
+def test_force_and_effects_act_together():
+    """A force callable given with effects adds to them (it used to be refused)."""
+    spring = {"type": "spring", "measure": {"u0": 1.0}, "k": 4.0}
+    model = nvib.Model([1.0], force=lambda u, v, t: 3.0 * u**3, effects=[spring], uses_velocity=False)
+    np.testing.assert_allclose(model.evaluate_force([0.5], [0.0], 0.0), [4.0 * 0.5 + 3.0 * 0.125], rtol=1e-15)
+    assert not model.uses_velocity and not model.is_linear
 
 
 @pytest.mark.parametrize("effect, name", [

@@ -678,11 +678,76 @@ class EffectSet {
   std::vector<Group> groups_;
 };
 
-// Model from a mass and the declared effects: springs and dampers assembled
-// once into K and C (added to the optional K_extra, C_extra), constant loads
-// into a constant vector, the rest evaluated each step.
-inline Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, Matrix K_extra = Matrix(),
-                                          Matrix C_extra = Matrix()) {
+// The declared effects plus one more force functor (a user's C++ law, or
+// Python callables through the binding): f = effects + extra. Flags are
+// or-ed (linear only if both are); the tangent is analytic only if both have
+// one (the model differentiates the sum otherwise); energy is accounted
+// only if both account for it.
+template <class Extra>
+class EffectsPlus {
+ public:
+  EffectsPlus() = default;
+  EffectsPlus(EffectSet effects, Extra extra, Index n)
+      : effects_(std::move(effects)), extra_(std::move(extra)), work_(Vector::Zero(n)), K2_(Matrix::Zero(n, n)),
+        C2_(Matrix::Zero(n, n)) {}
+
+  const EffectSet& effects() const { return effects_; }
+  Extra& extra() { return extra_; }
+  const Extra& extra() const { return extra_; }
+
+  void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
+    effects_(u, v, t, out);
+    extra_(u, v, t, work_);
+    out += work_;
+  }
+  bool has_tangent() const { return traits::has_tangent(extra_); }
+  void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
+    effects_.tangent(u, v, t, K, C);
+    if constexpr (traits::has_tangent_method<Extra>::value) {
+      extra_.tangent(u, v, t, K2_, C2_);
+      K += K2_;
+      C += C2_;
+    }
+  }
+  bool uses_velocity() const { return effects_.uses_velocity() || traits::uses_velocity(extra_); }
+  bool uses_time() const { return effects_.uses_time() || traits::uses_time(extra_); }
+  bool is_linear() const { return effects_.is_linear() && traits::is_linear(extra_); }
+
+  bool accounts_energy() const {
+    if constexpr (traits::has_energy<Extra>::value) return traits::accounts_energy(extra_);
+    return false;
+  }
+  double potential(const CVecRef& u, double t) const {
+    double e = effects_.potential(u, t);
+    if constexpr (traits::has_energy<Extra>::value) e += extra_.potential(u, t);
+    return e;
+  }
+  double input_power(const CVecRef& u, const CVecRef& v, double t) const {
+    double p = effects_.input_power(u, v, t);
+    if constexpr (traits::has_energy<Extra>::value) p += extra_.input_power(u, v, t);
+    return p;
+  }
+  double dissipated_power(const CVecRef& v) const {
+    double p = effects_.dissipated_power(v);
+    if constexpr (traits::has_energy<Extra>::value) p += extra_.dissipated_power(v);
+    return p;
+  }
+
+ private:
+  EffectSet effects_;
+  Extra extra_;
+  Vector work_;     // the extra force
+  Matrix K2_, C2_;  // the extra tangent
+};
+
+namespace detail_ {
+// Springs and dampers assembled once into K and C (added to the optional
+// K_extra, C_extra); constant loads and the rest go to the EffectSet.
+struct Assembled {
+  Matrix K, C;  // empty when nothing contributes
+  EffectSet set;
+};
+inline Assembled assemble(const Mass& mass, std::vector<Effect> list, const Matrix& K_extra, const Matrix& C_extra) {
   const Index n = mass.size();
   Matrix K = Matrix::Zero(n, n), C = Matrix::Zero(n, n);
   bool anyK = K_extra.size() > 0, anyC = C_extra.size() > 0;
@@ -702,7 +767,27 @@ inline Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, M
     for (size_t i = 0; i < e.index.size(); ++i)
       for (size_t j = 0; j < e.index.size(); ++j) A(e.index[i], e.index[j]) += e.p0 * e.coef[i] * e.coef[j];
   }
-  return Model<EffectSet>(std::move(mass), anyK ? K : Matrix(), anyC ? C : Matrix(), std::move(set));
+  return {anyK ? K : Matrix(), anyC ? C : Matrix(), std::move(set)};
+}
+}  // namespace detail_
+
+// Model from a mass and the declared effects: springs and dampers assembled
+// once into K and C (added to the optional K_extra, C_extra), constant loads
+// into a constant vector, the rest evaluated each step.
+inline Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, Matrix K_extra = Matrix(),
+                                          Matrix C_extra = Matrix()) {
+  auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra);
+  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set));
+}
+
+// The same plus one more force functor evaluated with the effects.
+template <class Extra>
+Model<EffectsPlus<Extra>> make_effect_model(Mass mass, std::vector<Effect> list, Extra extra,
+                                            Matrix K_extra = Matrix(), Matrix C_extra = Matrix()) {
+  const Index n = mass.size();
+  auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra);
+  return Model<EffectsPlus<Extra>>(std::move(mass), std::move(a.K), std::move(a.C),
+                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n));
 }
 
 }  // namespace effects
