@@ -16,14 +16,15 @@ from ._core import expm as _expm
 from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
 from ._model import EFFECT_PARAMETERS, Model
 from ._scenes import SceneError, load_scene, scene_names
-from ._solve import Energy, Result, Stepper, solve
+from ._solve import Energy, Result, Stepper, default_max_displacement, solve
 
 __version__ = "0.1.0"
 
 __all__ = [
     "CEMDTS", "CentralDifference", "ConvergenceError", "DivergenceError", "EFFECT_PARAMETERS", "Energy",
     "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Result",
-    "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "exact", "expm", "include_dir",
+    "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "default_max_displacement", "exact", "expm",
+    "include_dir",
     "load_scene", "scene_names", "solve",
 ]
 

@@ -116,6 +116,23 @@ class Stepper:
     last_residuals = property(lambda self: list(self._st.last_residuals),
                               doc="Newton residual norms of the last step (implicit schemes)")
 
+    def state(self) -> np.ndarray:
+        """The carried state as one vector: [u; v; a] followed by the scheme's history
+        (a_{n-1} for CEMDTS and Zhai; the order + 1 interpolated remainders, newest first,
+        for PreciseIntegration; with CentralDifference(velocity="half_step") v is v_{n-1/2})."""
+        return self._st.state()
+
+    def set_state(self, x, t: float | None = None) -> None:
+        """Continue from the carried state x (as ``state()`` returns it) at time t (default: now)."""
+        t = self.t if t is None else _checks.real("t", t)
+        try:
+            x = np.asarray(x, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"x: expected an array of real numbers ({exc})") from None
+        if x.ndim != 1:
+            raise ValueError(f"x: expected a 1-D state vector, got shape {x.shape}")
+        self._st.set_state(t, x)
+
     def step(self, n: int = 1) -> None:
         """Advance n steps; raises DivergenceError / ConvergenceError on failure."""
         n = _checks.integer("n", n, minimum=1)
@@ -140,7 +157,12 @@ class Stepper:
         if t_end <= self.t:
             raise ValueError(f"t_end: must be > the current time {self.t}, got {t_end}")
         save_every = _checks.integer("save_every", save_every, minimum=1)
-        bound = math.inf if max_displacement is None else _checks.real("max_displacement", max_displacement, positive=True)
+        if max_displacement is None:
+            bound = default_max_displacement(self.u, self.v, t_end - self.t)
+        elif isinstance(max_displacement, (int, float)) and max_displacement == math.inf:
+            bound = math.inf
+        else:
+            bound = _checks.real("max_displacement", max_displacement, positive=True)
         if progress is not None and not callable(progress):
             raise TypeError("progress: expected a callable progress(step, n_steps)")
         raw = self._st.integrate(t_end, save_every, _dof_indices(self.model, dofs), bound, 4096, progress,
@@ -151,12 +173,29 @@ class Stepper:
         return res
 
 
+BOUND_FACTOR = 1e10
+
+
+def default_max_displacement(u, v, duration: float) -> float:
+    """The default divergence bound on |u_i|: 1e10 x max(1, max|u|, max|v| x duration).
+
+    Far beyond any physical response of the model started from (u, v), yet
+    reached long before a diverging state overflows, so such a run stops with
+    a message naming the DOF instead of running on with inf or NaN."""
+    scale = max(1.0, float(np.max(np.abs(u), initial=0.0)), float(np.max(np.abs(v), initial=0.0)) * duration)
+    return BOUND_FACTOR * scale
+
+
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
           save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
           progress=None, energy: bool = False) -> Result:
     """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
 
-    Saves steps 0, save_every, 2 save_every, ... and always the last one. If
+    Saves steps 0, save_every, 2 save_every, ... and always the last one. A
+    run whose state becomes non-finite or whose |u_i| exceeds
+    ``max_displacement`` (default: ``default_max_displacement``, 1e10 times
+    the scale of the initial state; ``math.inf`` for none) stops within one
+    step with status 'diverged'. If
     (t_end - t0)/dt is not an integer the run ends at the first multiple of dt
     past t_end. With ``throw=False`` a failed run returns its partial history
     with ``status`` set instead of raising. ``energy=True`` records the

@@ -88,6 +88,13 @@ def _positive_real(text: str) -> float:
     return x
 
 
+def _bound(text: str) -> float:
+    """A positive real number or 'inf'."""
+    if text.strip().lower() in ("inf", "infinity"):
+        return math.inf
+    return _positive_real(text)
+
+
 def _positive_int(text: str) -> int:
     try:
         k = int(text)
@@ -512,8 +519,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"save every K-th step (default 1, or more to keep at most {MAX_SAVED} states)")
     g.add_argument("--without", nargs="+", action="extend", metavar="NAME",
                    help="leave out effects by name or type (repeatable)")
-    g.add_argument("--max-displacement", type=_positive_real, metavar="U",
-                   help="stop as diverged once some |u_i| exceeds U (default: only non-finite states)")
+    g.add_argument("--max-displacement", type=_bound, metavar="U",
+                   help="stop as diverged once some |u_i| exceeds U (default: 1e10 x max(1, max|u0|, "
+                        "max|v0| x duration); 'inf': only non-finite states)")
     g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
     g.add_argument("--energy", action="store_true", help="record the energy balance")
     g = p.add_argument_group("output")

@@ -240,6 +240,8 @@ struct AnyStepper {
   virtual std::string scheme_name() const = 0;
   virtual std::vector<double> last_residuals() const { return {}; }
   virtual Result integrate(double t_end, const SolveOptions& opt, py::object observer) = 0;
+  virtual Vector state() const = 0;
+  virtual void set_state(double t, const Vector& x) = 0;
 };
 
 // Called every few thousand steps: lets Ctrl-C through and reports progress.
@@ -300,6 +302,8 @@ struct StepperImpl final : AnyStepper {
     else
       return {};
   }
+  Vector state() const override { return s.state(); }
+  void set_state(double t, const Vector& x) override { s.set_state(t, x); }
   Result integrate(double t_end, const SolveOptions& opt, py::object observer) override {
     PyObserver obs{std::move(observer), releases_gil};
     if constexpr (releases_gil) {
@@ -638,6 +642,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("failure", [](const AnyStepper& s) { return failure_dict(s.failure()); })
       .def_property_readonly("scheme_name", &AnyStepper::scheme_name)
       .def_property_readonly("last_residuals", &AnyStepper::last_residuals)
+      .def("state", &AnyStepper::state, "the carried state [u; v; a; history...]")
+      .def("set_state", &AnyStepper::set_state, py::arg("t"), py::arg("x"))
       .def(
           "integrate",
           [](AnyStepper& s, double t_end, std::int64_t save_every, std::vector<Index> dofs, double max_displacement,

@@ -300,9 +300,11 @@ def stiff_model():
     return nvib.Model([1.0], K=[[1e4]], u0=[1.0], dofs=["x"])
 
 
+@pytest.mark.parametrize("bound", ["default", "none"])
 @pytest.mark.parametrize("name", ["CentralDifference", "CentralDifference(half_step)", "Zhai", "CEMDTS"])
-def test_divergence_without_throw_returns_partial_history(name):
-    res = nvib.solve(stiff_model(), ALL_SCHEMES[name](), dt=0.03, t_end=100.0, throw=False)
+def test_divergence_without_throw_returns_partial_history(name, bound):
+    kw = {} if bound == "default" else {"max_displacement": math.inf}
+    res = nvib.solve(stiff_model(), ALL_SCHEMES[name](), dt=0.03, t_end=100.0, throw=False, **kw)
     assert res.status == "diverged" and not res.success
     f = res.failure
     assert f["dof"] == 0 and 1 < f["step"] < res.num_steps_requested
@@ -310,8 +312,19 @@ def test_divergence_without_throw_returns_partial_history(name):
     # every step before the failed one is in the history, all finite
     assert res.u.shape == (f["step"], 1) and len(res.t) == f["step"]
     assert np.all(np.isfinite(res.u)) and np.all(np.isfinite(res.v))
-    assert np.abs(res.u[-1, 0]) > 1e100
+    if bound == "default":  # 1e10 x max|u0| with u0 = 1: stops when |u| first exceeds 1e10
+        assert "beyond the bound 1e+10" in f["message"]
+        assert 1.0 < np.abs(res.u[-1, 0]) <= 1e10
+    else:  # no bound: runs until the state is no longer finite
+        assert "not finite" in f["message"]
+        assert np.abs(res.u[-1, 0]) > 1e100
     assert res.stats.num_steps == f["step"]
+
+
+def test_default_bound_scales_with_the_initial_state():
+    assert nvib.default_max_displacement(np.zeros(2), np.zeros(2), 5.0) == 1e10
+    assert nvib.default_max_displacement(np.array([0.0, -3.0]), np.zeros(2), 5.0) == 3e10
+    assert nvib.default_max_displacement(np.zeros(2), np.array([2.0, 0.0]), 5.0) == 1e11
 
 
 def test_divergence_error_carries_details():

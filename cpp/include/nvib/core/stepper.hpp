@@ -47,7 +47,45 @@ class StepperBase {
   ModelT& model() { return model_; }
   const ModelT& model() const { return model_; }
 
+  // The carried state as one vector: [u; v; a] (3n), followed by the history
+  // a scheme keeps (its stepper documents it). set_state(t, state()) leaves a
+  // run unchanged; nvib.stability builds the amplification matrix of a linear
+  // model from these, column by column, with the stepper itself.
+  Index state_size() const { return 3 * size(); }
+  Vector state() const {
+    Vector x(state_size());
+    pack_base(x);
+    return x;
+  }
+  void set_state(double t, const Vector& x) {
+    check_state(t, x, state_size());
+    unpack_base(t, x);
+  }
+
  protected:
+  void pack_base(Vector& x) const {
+    const Index n = size();
+    x.segment(0, n) = u_;
+    x.segment(n, n) = v_;
+    x.segment(2 * n, n) = a_;
+  }
+  void check_state(double t, const Vector& x, Index expected) const {
+    detail::require(std::isfinite(t), "t: the time of the state must be finite");
+    detail::require(x.size() == expected, "state: expected " + std::to_string(expected) + " entries, got " +
+                                              std::to_string(x.size()));
+    detail::require(x.allFinite(), "state: the state has non-finite entries");
+  }
+  // Sets t, u, v, a; the step counter restarts at t.
+  void unpack_base(double t, const Vector& x) {
+    const Index n = size();
+    t0_ = t;
+    n_ = 0;
+    u_ = x.segment(0, n);
+    v_ = x.segment(n, n);
+    a_ = x.segment(2 * n, n);
+    failure_ = Failure{};
+  }
+
   void check_initial(double t0, const Vector& u0, const Vector& v0) const {
     const Index n = model_.size();
     detail::require(std::isfinite(t0), "t0: the initial time must be finite");

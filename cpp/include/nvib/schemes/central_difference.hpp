@@ -75,6 +75,13 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
 
   const CentralDifference& scheme() const { return scheme_; }
 
+  // State: [u; v; a]; with velocity = half_step, v is the carried v_{n-1/2}
+  // and the next step is a full kick from it.
+  void set_state(double t, const Vector& x) {
+    Base::set_state(t, x);
+    first_ = false;
+  }
+
  private:
   CentralDifference scheme_;
   Vector anew_, vstar_;

@@ -121,6 +121,27 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   }
 
   const PreciseIntegration& scheme() const { return p_; }
+
+  // State: [u; v; a; r_n, r_{n-1}, ..] with the order + 1 remainders of the
+  // interpolation history (newest first, n entries each). set_state() marks
+  // the whole history as known.
+  Index state_size() const { return 3 * this->size() + R_.size(); }
+  Vector state() const {
+    Vector x(state_size());
+    this->pack_base(x);
+    x.tail(R_.size()) = Eigen::Map<const Vector>(R_.data(), R_.size());
+    return x;
+  }
+  void set_state(double t, const Vector& x) {
+    detail::require(ready_, "set_state: initialize() must come first (it builds the exponential)");
+    this->check_state(t, x, state_size());
+    this->unpack_base(t, x);
+    const Index n = this->size();
+    x_.head(n) = u_;
+    x_.tail(n) = v_;
+    Eigen::Map<Vector>(R_.data(), R_.size()) = x.tail(R_.size());
+    nhist_ = R_.cols();
+  }
   const Matrix& transition() const { return T_; }
 
  private:

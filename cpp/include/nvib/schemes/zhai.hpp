@@ -54,6 +54,20 @@ class ZhaiStepper : public StepperBase<ModelT> {
 
   const Zhai& scheme() const { return scheme_; }
 
+  // State: [u; v; a; a_{n-1}].
+  Index state_size() const { return 4 * this->size(); }
+  Vector state() const {
+    Vector x(state_size());
+    this->pack_base(x);
+    x.tail(this->size()) = aprev_;
+    return x;
+  }
+  void set_state(double t, const Vector& x) {
+    this->check_state(t, x, state_size());
+    this->unpack_base(t, x);
+    aprev_ = x.tail(this->size());
+  }
+
  private:
   Zhai scheme_;
   Vector aprev_;
