@@ -40,6 +40,8 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.hpp"
+
 namespace {
 
 constexpr int N = 6;
@@ -147,19 +149,15 @@ void print_vec(const char* name, const double* x) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 6) {
-    std::fprintf(stderr, "usage: %s DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]\n", argv[0]);
-    return 2;
-  }
-  const double h = std::atof(argv[1]), t_end = std::atof(argv[2]);
-  const int repeats = std::atoi(argv[3]);
-  const double eta = std::atof(argv[4]);
+  BenchArgs args;
+  if (!parse_bench_args(argc, argv, args)) return 2;
+  const double h = args.h, t_end = args.t_end, eta = args.eta;
+  const int repeats = args.repeats;
   const std::int64_t nsteps = std::llround(t_end / h);
   using clock = std::chrono::steady_clock;
 
   for (int scheme = 0; scheme < 2; ++scheme) {
-    for (int arg = 5; arg < argc; ++arg) {
-      const std::int64_t k = std::atoll(argv[arg]);
+    for (const std::int64_t k : args.save_every) {
       // reuse: one preallocated output, warmed by an untimed run, filled again by every timed run.
       // fresh: the output allocated in every timed run (inside the timing, page faults included).
       std::vector<double> times, fresh;

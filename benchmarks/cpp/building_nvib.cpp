@@ -20,6 +20,8 @@
 #include <nvib/effects/effects.hpp>
 #include <nvib/solve.hpp>
 
+#include "bench_args.hpp"
+
 namespace {
 
 nvib::Model<nvib::effects::EffectSet> building() {
@@ -99,24 +101,17 @@ void bench(const char* label, const Scheme& scheme, const ModelT& model, double 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 6) {
-    std::fprintf(stderr, "usage: %s DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]\n", argv[0]);
-    return 2;
-  }
-  const double h = std::atof(argv[1]), t_end = std::atof(argv[2]);
-  const int repeats = std::atoi(argv[3]);
-  const double eta = std::atof(argv[4]);
+  BenchArgs a;
+  if (!parse_bench_args(argc, argv, a)) return 2;
   const auto scene = building();
   const auto functor = building_functor();
-  for (int arg = 5; arg < argc; ++arg) {
-    const std::int64_t k = std::atoll(argv[arg]);
-    bench("cd", nvib::CentralDifference(), scene, h, t_end, repeats, k);
-    bench("cd_functor", nvib::CentralDifference(), functor, h, t_end, repeats, k);
+  for (const std::int64_t k : a.save_every) {
+    bench("cd", nvib::CentralDifference(), scene, a.h, a.t_end, a.repeats, k);
+    bench("cd_functor", nvib::CentralDifference(), functor, a.h, a.t_end, a.repeats, k);
   }
-  for (int arg = 5; arg < argc; ++arg) {
-    const std::int64_t k = std::atoll(argv[arg]);
-    bench("cemdts", nvib::CEMDTS(eta), scene, h, t_end, repeats, k);
-    bench("cemdts_functor", nvib::CEMDTS(eta), functor, h, t_end, repeats, k);
+  for (const std::int64_t k : a.save_every) {
+    bench("cemdts", nvib::CEMDTS(a.eta), scene, a.h, a.t_end, a.repeats, k);
+    bench("cemdts_functor", nvib::CEMDTS(a.eta), functor, a.h, a.t_end, a.repeats, k);
   }
   return 0;
 }

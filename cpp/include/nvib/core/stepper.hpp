@@ -75,6 +75,18 @@ class StepperBase {
                                               std::to_string(x.size()));
     detail::require(x.allFinite(), "state: the state has non-finite entries");
   }
+  // [u; v; a; h] for a stepper that carries one more vector h (such as a_{n-1}).
+  Vector state_with(const Vector& h) const {
+    Vector x(3 * size() + h.size());
+    pack_base(x);
+    x.tail(h.size()) = h;
+    return x;
+  }
+  void set_state_with(double t, const Vector& x, Vector& h) {
+    check_state(t, x, 3 * size() + h.size());
+    unpack_base(t, x);
+    h = x.tail(h.size());
+  }
   // Sets t, u, v, a; the step counter restarts at t.
   void unpack_base(double t, const Vector& x) {
     const Index n = size();

@@ -66,17 +66,8 @@ class CEMDTSStepper : public StepperBase<ModelT> {
 
   // State: [u; v; a; a_{n-1}].
   Index state_size() const { return 4 * this->size(); }
-  Vector state() const {
-    Vector x(state_size());
-    this->pack_base(x);
-    x.tail(this->size()) = aprev_;
-    return x;
-  }
-  void set_state(double t, const Vector& x) {
-    this->check_state(t, x, state_size());
-    this->unpack_base(t, x);
-    aprev_ = x.tail(this->size());
-  }
+  Vector state() const { return this->state_with(aprev_); }
+  void set_state(double t, const Vector& x) { this->set_state_with(t, x, aprev_); }
 
  private:
   CEMDTS scheme_;
