@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-from . import exact
+from . import exact, stability
 from ._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
 from ._core import expm as _expm
 from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
@@ -25,7 +25,7 @@ __all__ = [
     "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Result",
     "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "default_max_displacement", "exact", "expm",
     "include_dir",
-    "load_scene", "scene_names", "solve",
+    "load_scene", "scene_names", "solve", "stability",
 ]
 
 
