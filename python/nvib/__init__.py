@@ -3,7 +3,8 @@
 Schemes: CentralDifference (leapfrog, LCDM), CEMDTS, Zhai, Newmark,
 GeneralizedAlpha, PreciseIntegration (PIM). Models: ``Model(mass, ...)`` with
 built-in effects or a Python force callable. ``solve(model, scheme, dt=, t_end=)``
-returns a Result; ``Stepper`` integrates step by step.
+returns a Result; ``Stepper`` integrates step by step. ``nvib.stability``: amplification
+matrices, spectral radius, period error and stability limit of each scheme.
 """
 
 from __future__ import annotations
