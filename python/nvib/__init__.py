@@ -3,14 +3,15 @@
 Schemes: CentralDifference (leapfrog, LCDM), CEMDTS, Zhai, Newmark,
 GeneralizedAlpha, PreciseIntegration (PIM). Models: ``Model(mass, ...)`` with
 built-in effects or a Python force callable. ``solve(model, scheme, dt=, t_end=)``
-returns a Result; ``Stepper`` integrates step by step.
+returns a Result; ``Stepper`` integrates step by step. ``nvib.stability``: amplification
+matrices, spectral radius, period error and stability limit of each scheme.
 """
 
 from __future__ import annotations
 
 import os
 
-from . import exact
+from . import exact, stability
 from ._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
 from ._core import expm as _expm
 from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
@@ -25,7 +26,7 @@ __all__ = [
     "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Result",
     "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "default_max_displacement", "exact", "expm",
     "include_dir",
-    "load_scene", "scene_names", "solve",
+    "load_scene", "scene_names", "solve", "stability",
 ]
 
 

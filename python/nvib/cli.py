@@ -3,6 +3,7 @@
     nvib scenes                      the built-in scenes
     nvib run SCENE [options]         integrate a scene, print a summary, optionally --out / --plot
     nvib demo                        hardening oscillator with every scheme against its closed form
+    nvib stability [options]         spectral radius and stability limit of schemes on a linear SDOF
 
 Exit status: 0 success, 1 the run failed (diverged, Newton failed) or an
 output could not be written, 2 bad input (the message names the argument).
@@ -459,6 +460,88 @@ def _print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args
     print("\n".join(f"{k:<{w}}  {v}" for k, v in lines))
 
 
+# ---------------------------------------------------------------- nvib stability
+
+STABILITY_SCHEMES = ("cd", "cemdts", "zhai", "newmark", "galpha", "pim")
+STABILITY_OMEGAS = (0.1, 1.0, 2.0, 10.0, 100.0)  # where the table shows the spectral radius
+
+
+def _stability(args, parser) -> int:
+    try:
+        return _stability_checked(args)
+    except _Usage as exc:
+        parser.error(f"argument {exc.argument}: {exc.message}" if exc.argument else exc.message)
+    return 2  # not reached: parser.error exits
+
+
+def _stability_schemes(args) -> list:
+    """(label, scheme) for each of --schemes, each given only the options that apply to it."""
+    from .stability import scheme_label
+
+    names = list(dict.fromkeys(args.schemes))
+    for opt, (_, applies) in _SCHEME_OPTIONS.items():
+        if getattr(args, opt, None) is not None and not set(applies) & set(names):
+            raise _Usage(_flag(opt), f"applies to none of --schemes {' '.join(names)} (only to {', '.join(applies)})")
+    out = []
+    for name in names:
+        kw = {opt: (getattr(args, opt, None) if name in applies else None)
+              for opt, (_, applies) in _SCHEME_OPTIONS.items()}
+        scheme = _make_scheme(argparse.Namespace(scheme=name, **kw))
+        label = scheme_label(scheme)
+        if label not in [lab for lab, _ in out]:  # lcdm and cd are one scheme
+            out.append((label, scheme))
+    return out
+
+
+def _stability_checked(args) -> int:
+    import numpy as np
+
+    from . import stability
+
+    if not 0.0 <= args.xi < 1.0:
+        raise _Usage("--xi", f"the damping ratio needs 0 <= xi < 1, got {args.xi:g}")
+    lo, hi = stability.OMEGA_RANGE
+    if args.omega_max > hi:
+        raise _Usage("--omega-max", f"must be <= {hi:g}, got {args.omega_max:g}")
+    if not lo <= args.omega_min < args.omega_max:
+        raise _Usage("--omega-min", f"must lie in [{lo:g}, --omega-max {args.omega_max:g}), got {args.omega_min:g}")
+    if args.plot:
+        _check_output("--plot", args.plot, PLOT_FORMATS)
+        import importlib.util
+
+        if importlib.util.find_spec("matplotlib") is None:
+            raise _Usage("--plot", "needs matplotlib (pip install matplotlib)")
+    schemes = _stability_schemes(args)
+    limit = max(stability.OMEGA_LIMIT, args.omega_max)
+
+    print(f"Linear SDOF u'' + 2 xi w u' + w^2 u = 0, xi = {args.xi:g}: amplification matrix of one step "
+          f"of each scheme's stepper, Omega = w dt")
+    print(f"Omega_crit: smallest Omega with spectral radius rho > 1 + {stability.RHO_TOL:g} "
+          f"(scan and bisection up to {limit:g}; 'none' = stable up to there)")
+    print()
+    rows = [["scheme", "Omega_crit"] + [f"rho({om:g})" for om in STABILITY_OMEGAS]]
+    crits = []
+    for label, scheme in schemes:
+        oc = stability.critical_omega_h(scheme, args.xi, omega_max=limit)
+        crits.append(oc)
+        rho = stability.spectral_radius(scheme, np.array(STABILITY_OMEGAS), args.xi)
+        rows.append([label, "none" if math.isinf(oc) else f"{oc:.6g}"] + [f"{r:.6g}" for r in rho])
+    lines = _table(rows, right=set(range(1, len(rows[0]))))
+    lines.insert(1, "-" * max(len(line) for line in lines))
+    print("\n".join(lines))
+    if args.plot:
+        oms = np.geomspace(args.omega_min, args.omega_max, args.points)
+        try:
+            stability.plot_spectral_radius([s for _, s in schemes], args.plot, xi=args.xi, omega_h=oms,
+                                           labels=[lab for lab, _ in schemes], critical=crits)
+        except OSError as exc:
+            print(f"nvib stability: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}",
+                  file=sys.stderr)
+            return 1
+        print(f"\nwrote {args.plot}")
+    return 0
+
+
 # ---------------------------------------------------------------- parser
 
 _RUN_EPILOG = """\
@@ -536,6 +619,37 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--repeats", type=int, default=5, help="timing repeats (the best is shown)")
     p.add_argument("--plot", metavar="PNG", help="write error histories and phase loci to this PNG")
     p.set_defaults(func=lambda args, parser: _demo(args), subparser=p)
+
+    p = sub.add_parser("stability", help="spectral radius and stability limit of schemes on a linear SDOF",
+                       description="Spectral radius of each scheme's amplification matrix for the linear SDOF "
+                                   "u'' + 2 xi w u' + w^2 u = 0 against Omega = w dt (taken from the steppers "
+                                   "themselves), and the stability limit Omega_crit.",
+                       epilog="example:\n  nvib stability --schemes cd cemdts zhai newmark galpha pim --xi 0.05 "
+                              "--plot rho.png",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--schemes", nargs="+", choices=SCHEME_CHOICES, default=list(STABILITY_SCHEMES), metavar="NAME",
+                   help=f"schemes to compare, from {', '.join(SCHEME_CHOICES)} (default: {' '.join(STABILITY_SCHEMES)})")
+    p.add_argument("--xi", type=_real, default=0.0, help="damping ratio, 0 <= xi < 1 (default 0)")
+    g = p.add_argument_group("scheme parameters (each applies to the schemes that have it)")
+    g.add_argument("--velocity", choices=("synchronized", "half_step"), help="lcdm/cd: velocity carried")
+    g.add_argument("--eta", type=_real, help="cemdts: eta (default 0.45)")
+    g.add_argument("--psi", type=_real, help="zhai: psi (default 1/2)")
+    g.add_argument("--phi", type=_real, help="zhai: phi (default 1/2)")
+    g.add_argument("--beta", type=_real, help="newmark/galpha: beta (default 1/4)")
+    g.add_argument("--gamma", type=_real, help="newmark/galpha: gamma (default 1/2)")
+    g.add_argument("--alpha-m", type=_real, help="galpha: alpha_m (default 1/2)")
+    g.add_argument("--alpha-f", type=_real, help="galpha: alpha_f (default 1/2)")
+    g.add_argument("--rho-inf", type=_real, metavar="R", help="galpha: spectral radius at infinity")
+    g.add_argument("--squarings", type=_int, help="pim: 2^N squarings of the exponential (default 20)")
+    g.add_argument("--order", type=_int, help="pim: interpolation order of the load term (default 2)")
+    g.add_argument("--corrections", type=_int, help="pim: corrector passes (default 1)")
+    g = p.add_argument_group("plot")
+    g.add_argument("--plot", metavar="PNG", help="write spectral radius against Omega (log axis) to this PNG")
+    g.add_argument("--omega-min", type=_positive_real, default=1e-2, metavar="W", help="plot from Omega = W (default 0.01)")
+    g.add_argument("--omega-max", type=_positive_real, default=100.0, metavar="W",
+                   help="plot up to Omega = W (default 100; Omega_crit is searched up to max(W, 1e4))")
+    g.add_argument("--points", type=_positive_int, default=300, help="Omega values on the plot (default 300)")
+    p.set_defaults(func=_stability, subparser=p)
     return parser
 
 
