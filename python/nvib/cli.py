@@ -559,6 +559,27 @@ examples:
 """
 
 
+def _add_scheme_parameters(g, *, iteration: bool = True) -> None:
+    """The scheme parameters as options (the keys of _SCHEME_OPTIONS); each applies to the schemes that have it."""
+    g.add_argument("--velocity", choices=("synchronized", "half_step"),
+                   help="lcdm/cd: velocity carried and reported (default synchronized)")
+    g.add_argument("--eta", type=_real, help="cemdts: eta (default 0.45)")
+    g.add_argument("--psi", type=_real, help="zhai: psi (default 1/2)")
+    g.add_argument("--phi", type=_real, help="zhai: phi (default 1/2)")
+    g.add_argument("--beta", type=_real, help="newmark/galpha: beta (default 1/4)")
+    g.add_argument("--gamma", type=_real, help="newmark/galpha: gamma (default 1/2)")
+    g.add_argument("--alpha-m", type=_real, help="galpha: alpha_m (default 1/2)")
+    g.add_argument("--alpha-f", type=_real, help="galpha: alpha_f (default 1/2)")
+    g.add_argument("--rho-inf", type=_real, metavar="R",
+                   help="galpha: spectral radius at infinity; sets alpha_m, alpha_f, beta, gamma")
+    if iteration:
+        g.add_argument("--iteration", choices=("newton", "modified", "none"),
+                       help="newmark/galpha: equilibrium iteration (default newton)")
+    g.add_argument("--squarings", type=_int, help="pim: 2^N squarings of the exponential (default 20)")
+    g.add_argument("--order", type=_int, help="pim: interpolation order of the load term (default 2)")
+    g.add_argument("--corrections", type=_int, help="pim: corrector passes (default 1)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -579,22 +600,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", metavar="SCENE", help="built-in scene name (see nvib scenes) or path to a .toml scene")
     g = p.add_argument_group("scheme")
     g.add_argument("--scheme", choices=SCHEME_CHOICES, default="cemdts", help="time-stepping scheme (default cemdts)")
-    g.add_argument("--velocity", choices=("synchronized", "half_step"),
-                   help="lcdm/cd: velocity carried and reported (default synchronized)")
-    g.add_argument("--eta", type=_real, help="cemdts: eta (default 0.45)")
-    g.add_argument("--psi", type=_real, help="zhai: psi (default 1/2)")
-    g.add_argument("--phi", type=_real, help="zhai: phi (default 1/2)")
-    g.add_argument("--beta", type=_real, help="newmark/galpha: beta (default 1/4)")
-    g.add_argument("--gamma", type=_real, help="newmark/galpha: gamma (default 1/2)")
-    g.add_argument("--alpha-m", type=_real, help="galpha: alpha_m (default 1/2)")
-    g.add_argument("--alpha-f", type=_real, help="galpha: alpha_f (default 1/2)")
-    g.add_argument("--rho-inf", type=_real, metavar="R",
-                   help="galpha: spectral radius at infinity; sets alpha_m, alpha_f, beta, gamma")
-    g.add_argument("--iteration", choices=("newton", "modified", "none"),
-                   help="newmark/galpha: equilibrium iteration (default newton)")
-    g.add_argument("--squarings", type=_int, help="pim: 2^N squarings of the exponential (default 20)")
-    g.add_argument("--order", type=_int, help="pim: interpolation order of the load term (default 2)")
-    g.add_argument("--corrections", type=_int, help="pim: corrector passes (default 1)")
+    _add_scheme_parameters(g)
     g = p.add_argument_group("run")
     g.add_argument("--dt", type=_positive_real, help="time step [s] (default: the scene's)")
     g.add_argument("--t-end", type=_positive_real, metavar="T", help="end time [s] (default: the scene's)")
@@ -631,18 +637,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"schemes to compare, from {', '.join(SCHEME_CHOICES)} (default: {' '.join(STABILITY_SCHEMES)})")
     p.add_argument("--xi", type=_real, default=0.0, help="damping ratio, 0 <= xi < 1 (default 0)")
     g = p.add_argument_group("scheme parameters (each applies to the schemes that have it)")
-    g.add_argument("--velocity", choices=("synchronized", "half_step"), help="lcdm/cd: velocity carried")
-    g.add_argument("--eta", type=_real, help="cemdts: eta (default 0.45)")
-    g.add_argument("--psi", type=_real, help="zhai: psi (default 1/2)")
-    g.add_argument("--phi", type=_real, help="zhai: phi (default 1/2)")
-    g.add_argument("--beta", type=_real, help="newmark/galpha: beta (default 1/4)")
-    g.add_argument("--gamma", type=_real, help="newmark/galpha: gamma (default 1/2)")
-    g.add_argument("--alpha-m", type=_real, help="galpha: alpha_m (default 1/2)")
-    g.add_argument("--alpha-f", type=_real, help="galpha: alpha_f (default 1/2)")
-    g.add_argument("--rho-inf", type=_real, metavar="R", help="galpha: spectral radius at infinity")
-    g.add_argument("--squarings", type=_int, help="pim: 2^N squarings of the exponential (default 20)")
-    g.add_argument("--order", type=_int, help="pim: interpolation order of the load term (default 2)")
-    g.add_argument("--corrections", type=_int, help="pim: corrector passes (default 1)")
+    _add_scheme_parameters(g, iteration=False)  # a linear SDOF: the iteration changes nothing
     g = p.add_argument_group("plot")
     g.add_argument("--plot", metavar="PNG", help="write spectral radius against Omega (log axis) to this PNG")
     g.add_argument("--omega-min", type=_positive_real, default=1e-2, metavar="W", help="plot from Omega = W (default 0.01)")
