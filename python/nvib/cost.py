@@ -440,8 +440,12 @@ def plot_work_precision(rows: list[dict], path: str, *, title: str | None = None
     for r in rows:
         groups.setdefault((r["contender"], r["label"]), []).append(r)
     styles = {"nvib": ("-", "o"), "scipy": ("--", "s")}
+    import matplotlib
+
+    palette = matplotlib.colormaps["tab20"]
     drawn = 0
     for i, ((who, label), rs) in enumerate(groups.items()):
+        color = palette(((2 * i) % 20 + (2 * i // 20) % 2) / 19.999)  # the dark shades first, then the light
         ok = [r for r in rs if r["status"] == "success" and r["max_error"] > 0]
         ok.sort(key=lambda r: -(r["dt"] if who != "scipy" else r["rtol"]))
         failed = sum(r["status"] not in ("success", "skipped") for r in rs)
@@ -451,10 +455,10 @@ def plot_work_precision(rows: list[dict], path: str, *, title: str | None = None
             name += f" ({failed} failed)"
         if ok:
             ax.loglog([r["wall_time"] for r in ok], [r["max_error"] for r in ok], ls=ls, marker=marker, ms=4,
-                      lw=1.3, color=f"C{i % 10}", label=name)
+                      lw=1.3, color=color, label=name)
             drawn += 1
         else:
-            ax.plot([], [], ls=ls, marker=marker, color=f"C{i % 10}", label=name + " (nothing to draw)")
+            ax.plot([], [], ls=ls, marker=marker, color=color, label=name + " (nothing to draw)")
     if target is not None:
         ax.axhline(target, color="k", ls=":", lw=1.0, label=f"error {target:g}")
     if drawn:
