@@ -1,23 +1,33 @@
-// Command line shared by the building benchmark programs (no nvib in here: the
-// hand-written loop must not depend on the library it is compared with).
-//   PROGRAM DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]
+// Command line shared by the benchmark programs (no nvib in here: the
+// hand-written loops must not depend on the library they are compared with).
+//   PROGRAM DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...] [--dump=PREFIX]
 #pragma once
 
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <string>
 #include <vector>
+
+// Removes a trailing --dump=PREFIX from the arguments and returns PREFIX ("" if absent).
+inline std::string take_dump(int& argc, char** argv) {
+  if (argc > 1 && std::strncmp(argv[argc - 1], "--dump=", 7) == 0) return std::string(argv[--argc] + 7);
+  return {};
+}
 
 struct BenchArgs {
   double h = 0.0, t_end = 0.0, eta = 0.0;
   int repeats = 0;
   std::vector<std::int64_t> save_every;
+  std::string dump;  // with --dump=PREFIX: where to write the saved displacements
 };
 
 // False (after printing the usage) when the arguments are missing.
 inline bool parse_bench_args(int argc, char** argv, BenchArgs& a) {
+  a.dump = take_dump(argc, argv);
   if (argc < 6) {
-    std::fprintf(stderr, "usage: %s DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...] [--dump=PREFIX]\n", argv[0]);
     return false;
   }
   a.h = std::atof(argv[1]);

@@ -22,11 +22,13 @@
 // page faults); "best_fresh" allocates it inside every timed run, as
 // nvib::solve() does (fresh memory from the OS faults in on first touch).
 //
-// Usage: building_loop DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]
+// Usage: building_loop DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...] [--dump=PREFIX]
 // Prints one JSON object per (scheme, save_every) line: the best and median
 // wall time of REPEATS runs, the best with fresh output, and the final state
 // (so the work cannot be optimised away, and so the caller can compare with
-// nvib).
+// nvib). With --dump=PREFIX the saved displacements of the reused output are
+// written to PREFIX.<scheme>.<save_every>.bin (row-major doubles, rows x 6),
+// so benchmarks/cost.py can measure the loop's own error.
 //
 // Build: g++ -std=c++17 -O3 -DNDEBUG building_loop.cpp -o building_loop
 // (the flags of nvib's Release wheel: no -march=native).
@@ -36,6 +38,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -153,6 +156,7 @@ int main(int argc, char** argv) {
   if (!parse_bench_args(argc, argv, args)) return 2;
   const double h = args.h, t_end = args.t_end, eta = args.eta;
   const int repeats = args.repeats;
+  const std::string& dump = args.dump;
   const std::int64_t nsteps = std::llround(t_end / h);
   using clock = std::chrono::steady_clock;
 
@@ -178,6 +182,16 @@ int main(int argc, char** argv) {
       // Read the saved history outside the timed region so it is observable.
       for (std::int64_t j = 0; j < kept.rows * N; j += 97) checksum += kept.u[j];
       rows = kept.rows;
+      if (!dump.empty()) {
+        const std::string path = dump + (scheme == 0 ? ".cd." : ".cemdts.") + std::to_string(k) + ".bin";
+        std::FILE* fh = std::fopen(path.c_str(), "wb");
+        const size_t count = static_cast<size_t>(kept.rows * N);
+        if (!fh || std::fwrite(kept.u.get(), sizeof(double), count, fh) != count) {
+          std::fprintf(stderr, "cannot write %s\n", path.c_str());
+          return 1;
+        }
+        std::fclose(fh);
+      }
       for (int r = 0; r < repeats; ++r) {
         const auto t0 = clock::now();
         Output out = allocate(nsteps, k);

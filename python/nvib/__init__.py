@@ -3,8 +3,11 @@
 Schemes: CentralDifference (leapfrog, LCDM), CEMDTS, Zhai, Newmark,
 GeneralizedAlpha, PreciseIntegration (PIM). Models: ``Model(mass, ...)`` with
 built-in effects or a Python force callable. ``solve(model, scheme, dt=, t_end=)``
-returns a Result; ``Stepper`` integrates step by step. ``nvib.stability``: amplification
-matrices, spectral radius, period error and stability limit of each scheme.
+returns a Result; ``Stepper`` integrates step by step. ``reference(model, t_end)``
+gives a closed form or a DOP853 solution to measure against; ``cost(model,
+schemes, dts)`` and ``cost_scipy(model)`` measure accuracy against wall time.
+``nvib.stability``: amplification matrices, spectral radius, period error and
+stability limit of each scheme.
 """
 
 from __future__ import annotations
@@ -18,15 +21,18 @@ from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatri
 from ._model import EFFECT_PARAMETERS, Model
 from ._scenes import SceneError, load_scene, scene_names
 from ._solve import Energy, Result, Stepper, default_max_displacement, solve
+# nvib.reference and nvib.cost are the functions; `from nvib.cost import ...` still reaches the modules
+from .reference import Reference, reference
+from .cost import cheapest, cost, cost_scipy, markdown_table, plot_work_precision, scheme_label, time_at_error
 
 __version__ = "0.1.0"
 
 __all__ = [
     "CEMDTS", "CentralDifference", "ConvergenceError", "DivergenceError", "EFFECT_PARAMETERS", "Energy",
-    "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Result",
-    "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cmake_dir", "default_max_displacement", "exact", "expm",
-    "include_dir",
-    "load_scene", "scene_names", "solve", "stability",
+    "GeneralizedAlpha", "Model", "Newmark", "NvibError", "PreciseIntegration", "Reference", "Result",
+    "SceneError", "SingularMatrixError", "Stepper", "Zhai", "cheapest", "cmake_dir", "cost", "cost_scipy",
+    "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
+    "plot_work_precision", "reference", "scene_names", "scheme_label", "solve", "stability", "time_at_error",
 ]
 
 
