@@ -11,8 +11,8 @@ from __future__ import annotations
 import os
 
 from . import exact
-from ._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
 from ._core import expm as _expm
+from ._schemes import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
 from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
 from ._model import EFFECT_PARAMETERS, Model
 from ._scenes import SceneError, load_scene, scene_names
