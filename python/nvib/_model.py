@@ -137,7 +137,7 @@ class Model:
         self.name = str(name)
         self.effects = None
         self.python_laws: list[str] = []  # where each Python law sits ("effects[3]")
-        self.without = tuple(without)
+        self.without = (without,) if isinstance(without, str) else tuple(without)
         builtin, laws = [], []
         if effects is not None:
             effects = list(effects)
@@ -269,11 +269,12 @@ class Model:
 
     def evaluate_force(self, u, v, t: float = 0.0) -> np.ndarray:
         """K u + C v + F(u, v, t): everything on the left of M a + ... = 0."""
-        return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), float(t))
+        return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), _checks.real("t", t))
 
     def tangent_matrices(self, u, v, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """(K_t, C_t): derivatives of K u + C v + F(u, v, t) with respect to u and v."""
-        return self._core.tangent(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), float(t))
+        return self._core.tangent(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n),
+                                  _checks.real("t", t))
 
     def linearized_frequencies(self, u=None) -> np.ndarray:
         """Circular frequencies [rad/s] of the undamped model linearised at u (default: zero), ascending."""
@@ -292,6 +293,9 @@ class Model:
         regularised with a mass-proportional term, like an implicit dynamic
         step, until the tangent becomes regular.
         """
+        t = _checks.real("t", t)
+        rtol = _checks.real("rtol", rtol, positive=True)
+        max_iter = _checks.integer("max_iter", max_iter, minimum=1)
         u = np.zeros(self.n) if u_guess is None else _checks.vector("u_guess", u_guess, self.n).copy()
         v = np.zeros(self.n)
         mdiag = np.diag(self.mass_matrix)

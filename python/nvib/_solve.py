@@ -196,8 +196,8 @@ def default_max_displacement(u, v, duration: float) -> float:
     reached long before a diverging state overflows, so such a run stops with
     a message naming the DOF instead of running on with inf or NaN. The same
     bound is the default of the C++ solve()."""
-    u = np.atleast_1d(np.asarray(u, dtype=float)).ravel()
-    v = np.atleast_1d(np.asarray(v, dtype=float)).ravel()
+    u = np.atleast_1d(_checks.real_array("u", u)).ravel()
+    v = np.atleast_1d(_checks.real_array("v", v)).ravel()
     return _core.default_max_displacement(u, v, _checks.real("duration", duration))
 
 

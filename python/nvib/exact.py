@@ -16,9 +16,32 @@ import math
 import numpy as np
 
 
+def _params(**kw):
+    """Named checks: masses and stiffnesses > 0, the rest finite (a, c >= 0)."""
+    from ._checks import real
+
+    out = []
+    for name, x in kw.items():
+        x = real(name, x, positive=name in ("m", "k", "k0"))
+        if name in ("a", "c") and x < 0.0:
+            raise ValueError(f"{name}: must be >= 0, got {x}")
+        out.append(x)
+    return out
+
+
+def _times(t):
+    from ._checks import real_array
+
+    t = real_array("t", t)
+    if not np.all(np.isfinite(t)):
+        raise ValueError("t: contains NaN or Inf")
+    return t
+
+
 def linear_sdof(t, *, m: float, k: float, c: float = 0.0, x0: float = 1.0, v0: float = 0.0):
     """Displacement and velocity of the free linear oscillator (0 <= damping ratio < 1)."""
-    t = np.asarray(t, dtype=float)
+    m, k, c, x0, v0 = _params(m=m, k=k, c=c, x0=x0, v0=v0)
+    t = _times(t)
     w = math.sqrt(k / m)
     xi = c / (2.0 * m * w)
     if not 0.0 <= xi < 1.0:
@@ -36,7 +59,8 @@ def hardening(t, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: floa
     """Displacement and velocity of m x'' + k0 (1 + a x^2) x = 0, x(0) = x0, x'(0) = 0."""
     from scipy import special
 
-    t = np.asarray(t, dtype=float)
+    m, k0, a, x0 = _params(m=m, k0=k0, a=a, x0=x0)
+    t = _times(t)
     alpha, beta = k0 / m, k0 * a / m
     w = math.sqrt(alpha + beta * x0 * x0)
     me = beta * x0 * x0 / (2.0 * w * w)
@@ -48,6 +72,7 @@ def hardening_period(*, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: 
     """Period 4 K(m_e) / w of the hardening oscillator."""
     from scipy import special
 
+    m, k0, a, x0 = _params(m=m, k0=k0, a=a, x0=x0)
     alpha, beta = k0 / m, k0 * a / m
     w = math.sqrt(alpha + beta * x0 * x0)
     me = beta * x0 * x0 / (2.0 * w * w)
@@ -56,6 +81,9 @@ def hardening_period(*, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: 
 
 def hardening_energy(x, v, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0):
     """Kinetic plus potential energy m v^2/2 + k0 (x^2/2 + a x^4/4)."""
-    x = np.asarray(x, dtype=float)
-    v = np.asarray(v, dtype=float)
+    from ._checks import real_array
+
+    m, k0, a = _params(m=m, k0=k0, a=a)
+    x = real_array("x", x)
+    v = real_array("v", v)
     return 0.5 * m * v * v + k0 * (0.5 * x * x + 0.25 * a * x ** 4)

@@ -168,7 +168,8 @@ def make_law(kind: str):
 
 # --------------------------------------------------------------------------- effects and masses
 PARAMS = {  # type -> {parameter: range of valid values}
-    "spring": {"k": (0.0, 1e4)}, "damper": {"c": (0.0, 10.0)}, "hardening_spring": {"k0": (0.0, 1e4), "a": (0.0, 100.0)},
+    "spring": {"k": (0.0, 1e4)}, "damper": {"c": (0.0, 10.0)},
+    "hardening_spring": {"k0": (0.0, 1e4), "a": (0.0, 100.0)},
     "cubic_spring": {"k3": (0.0, 1e4)}, "power_damper": {"c": (0.0, 10.0), "p": (0.5, 3.0)},
     "pendulum_gravity": {"m": (0.1, 10.0), "g": (0.0, 10.0), "l": (0.1, 10.0)}, "hertz_contact": {"G": (1e-8, 1e-3)},
     "constant_force": {"value": (-100.0, 100.0)}, "harmonic_force": {"amplitude": (-10.0, 10.0), "omega": (0.0, 50.0)},

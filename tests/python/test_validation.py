@@ -153,3 +153,41 @@ def test_default_divergence_bound_is_the_cpp_one():
     model = nvib.Model([1.0], K=[[1e4]], u0=[2.0], dofs=["x"])
     res = nvib.solve(model, nvib.CentralDifference(), dt=0.03, t_end=100.0, throw=False)
     assert "beyond the bound 2e+10" in res.failure["message"]
+
+
+@pytest.mark.parametrize("args, error, match", [
+    (("a",), TypeError, r"^A: expected real numbers"),
+    (([[1j]],), TypeError, r"^A: expected real numbers"),
+    ((np.ones(3),), ValueError, r"^A: expected a square matrix"),
+    ((np.eye(2), "x"), TypeError, r"^squarings: expected an integer"),
+    ((np.eye(2), 2.5), TypeError, r"^squarings: expected an integer"),
+    ((np.eye(2), 10**30), ValueError, r"^squarings: needs 0 <= squarings <= 60"),
+    ((np.eye(2) * 1e300,), ValueError, r"^A: e\^A overflows"),
+])
+def test_expm_arguments(args, error, match):
+    with pytest.raises(error, match=match):
+        nvib.expm(*args)
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda: nvib.exact.linear_sdof([0.0], m=0.0, k=1.0), ValueError, r"^m: must be > 0"),
+    (lambda: nvib.exact.linear_sdof([0.0], m=1.0, k=-1.0), ValueError, r"^k: must be > 0"),
+    (lambda: nvib.exact.linear_sdof(["a"], m=1.0, k=1.0), TypeError, r"^t: expected real numbers"),
+    (lambda: nvib.exact.hardening([0.0], a=-1.0), ValueError, r"^a: must be >= 0"),
+    (lambda: nvib.exact.hardening([float("nan")]), ValueError, r"^t: contains NaN"),
+    (lambda: nvib.exact.hardening_period(x0="1"), TypeError, r"^x0: expected a real number"),
+    (lambda: nvib.exact.hardening_energy([1.0], [0.0], m=-2.0), ValueError, r"^m: must be > 0"),
+    (lambda: nvib.Model([1.0], K=[[1.0]]).evaluate_force([0.0], [0.0], "t"), TypeError, r"^t: expected a real"),
+    (lambda: nvib.Model([1.0], K=[[1.0]]).static_equilibrium(max_iter=0), ValueError, r"^max_iter: must be >= 1"),
+    (lambda: nvib.default_max_displacement("u", [0.0], 1.0), TypeError, r"^u: expected real numbers"),
+])
+def test_helpers_name_their_arguments(call, error, match):
+    with pytest.raises(error, match=match):
+        call()
+
+
+def test_without_takes_a_single_name():
+    eff = [{"type": "spring", "name": "s", "measure": {"x": 1.0}, "k": 1.0},
+           {"type": "constant_force", "name": "gravity", "measure": {"x": 1.0}, "value": 1.0}]
+    one = nvib.Model([1.0], effects=eff, dofs=["x"], without="gravity")
+    assert [e.name for e in one.effects] == ["s"]
