@@ -13,7 +13,8 @@ and GaM in the incremental format (iteration="none"); both formats are checked.
 
 Theory cited:
   [CD]   central differences are stable for omega dt < 2 on a linear system;
-         on a nonlinear one this is the tangent frequency at the stiffest state;
+         on a nonlinear one the usual estimate takes the tangent frequency at
+         the stiffest state (the stability scan shows it is not sufficient);
   [SYMP] the leapfrog (LCDM) and the implicit midpoint rule (GaM with
          alpha_m = alpha_f = 1/2 in nvib's alpha-point form) are symplectic:
          their energy error stays bounded, with no drift, over exponentially
@@ -22,7 +23,7 @@ Theory cited:
          displacements and differ in the velocity only;
   [MAP]  the leapfrog on the pendulum is Chirikov's standard map with
          K = (omega dt)^2; near the separatrix it has a chaotic layer whose width
-         grows with K (Chirikov 1979): at K = 0.64 the IC1 orbit, 0.5 % of the
+         grows with K (Chirikov 1979): at K = 0.64 the IC1 orbit, 0.6 % of the
          energy below the separatrix, lies in it and crosses over the top at a
          time set by round-off;
   [INC]  the incremental format solves once per step and accepts the
