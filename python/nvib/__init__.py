@@ -15,8 +15,8 @@ from __future__ import annotations
 import os
 
 from . import exact, stability
-from ._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
 from ._core import expm as _expm
+from ._schemes import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
 from ._errors import ConvergenceError, DivergenceError, NvibError, SingularMatrixError
 from ._model import EFFECT_PARAMETERS, Model
 from ._scenes import SceneError, load_scene, scene_names
@@ -40,10 +40,18 @@ def expm(A, squarings: int = 20):
     """e^A by the 2^N algorithm of the precise integration method (Zhong & Williams 1994)."""
     import numpy as np
 
-    A = np.asarray(A, dtype=float)
+    from . import _checks
+
+    A = _checks.real_array("A", A)
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise ValueError(f"A: expected a square matrix, got shape {A.shape}")
-    return _expm(A, int(squarings))
+    squarings = _checks.integer("squarings", squarings)
+    if not 0 <= squarings <= 60:
+        raise ValueError(f"squarings: needs 0 <= squarings <= 60, got {squarings}")
+    E = _expm(A, squarings)
+    if not np.all(np.isfinite(E)):
+        raise ValueError(f"A: e^A overflows (max |A_ij| = {np.max(np.abs(A)):g})")
+    return E
 
 
 def include_dir() -> str:

@@ -11,7 +11,10 @@ import numpy as np
 def real(name: str, x, *, positive: bool = False) -> float:
     if isinstance(x, bool) or not isinstance(x, numbers.Real):
         raise TypeError(f"{name}: expected a real number, got {type(x).__name__}")
-    x = float(x)
+    try:
+        x = float(x)
+    except OverflowError:  # an integer too large for a double
+        raise ValueError(f"{name}: must be finite, got an integer too large for a double") from None
     if not math.isfinite(x):
         raise ValueError(f"{name}: must be finite, got {x}")
     if positive and x <= 0.0:
@@ -28,11 +31,25 @@ def integer(name: str, x, *, minimum: int | None = None) -> int:
     return x
 
 
-def vector(name: str, x, n: int) -> np.ndarray:
+def real_array(name: str, x) -> np.ndarray:
+    """x as a float array; complex, boolean, string or object entries raise TypeError naming the argument
+    (NumPy would drop an imaginary part with only a warning, or parse strings)."""
     try:
-        a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"{name}: expected an array of {n} real numbers ({exc})") from None
+        a = np.asarray(x)
+    except (TypeError, ValueError) as exc:  # a ragged nested list
+        raise ValueError(f"{name}: expected a regular array of real numbers ({exc})") from None
+    if a.dtype.kind in "iuf":
+        return a.astype(float, copy=False)
+    if a.dtype.kind == "O":
+        try:
+            return a.astype(float)
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise TypeError(f"{name}: expected real numbers ({exc})") from None
+    raise TypeError(f"{name}: expected real numbers, got an array of dtype {a.dtype}")
+
+
+def vector(name: str, x, n: int) -> np.ndarray:
+    a = real_array(name, x)
     if a.ndim == 0 and n == 1:
         a = a.reshape(1)
     if a.shape != (n,):
@@ -43,10 +60,7 @@ def vector(name: str, x, n: int) -> np.ndarray:
 
 
 def matrix(name: str, x, n: int) -> np.ndarray:
-    try:
-        a = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"{name}: expected a ({n}, {n}) matrix of real numbers ({exc})") from None
+    a = real_array(name, x)
     if a.ndim == 0 and n == 1:
         a = a.reshape(1, 1)
     if a.shape != (n, n):

@@ -7,7 +7,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['CEMDTS', 'CentralDifference', 'Effect', 'EffectModel', 'GeneralizedAlpha', 'HybridModel', 'Newmark', 'PreciseIntegration', 'Stats', 'Stepper', 'Zhai', 'expm', 'make_stepper', 'steps_to_reach']
+__all__: list[str] = ['CEMDTS', 'CentralDifference', 'Effect', 'EffectModel', 'GeneralizedAlpha', 'HybridModel', 'Newmark', 'PreciseIntegration', 'Stats', 'Stepper', 'Zhai', 'default_max_displacement', 'expm', 'make_stepper', 'steps_to_reach']
 class Stats:
     def __init__(self) -> None:
         ...
@@ -361,6 +361,9 @@ class Stepper:
     def failure(self) -> dict:
         ...
     @property
+    def accepted_residual(self) -> float:
+        ...
+    @property
     def last_residuals(self) -> list[float]:
         ...
     @property
@@ -384,6 +387,8 @@ class Stepper:
     @property
     def v(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
         ...
+def default_max_displacement(u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], duration: typing.SupportsFloat | typing.SupportsIndex) -> float:
+    ...
 def expm(A: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], squarings: typing.SupportsInt | typing.SupportsIndex = 20) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
     """
     Matrix exponential by the 2^N algorithm of the precise integration method.

@@ -64,8 +64,8 @@ def _signal(where: str, spec) -> dict:
         out["omega"] = _checks.real(f"{where}.omega", spec["omega"])
         out["phase"] = _checks.real(f"{where}.phase", spec.get("phase", 0.0))
     else:
-        t = np.asarray(spec["t"], dtype=float)
-        y = np.asarray(spec["values"], dtype=float)
+        t = _checks.real_array(f"{where}.t", spec["t"])
+        y = _checks.real_array(f"{where}.values", spec["values"])
         if t.ndim != 1 or t.size < 2:
             raise ValueError(f"{where}.t: expected a list of at least two times")
         if y.shape != t.shape:
@@ -105,7 +105,7 @@ class Model:
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
                  u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
-        m = np.ascontiguousarray(mass if not isinstance(mass, numbers.Real) else [mass], dtype=float)
+        m = np.ascontiguousarray(_checks.real_array("mass", [mass] if isinstance(mass, numbers.Real) else mass))
         if m.ndim not in (1, 2):
             raise ValueError(f"mass: expected a 1-D array (diagonal) or a 2-D matrix, got {m.ndim} dimensions")
         n = m.shape[0]
@@ -114,6 +114,8 @@ class Model:
         self.n = n
         if dofs is None:
             dofs = [f"u{i}" for i in range(n)]
+        if isinstance(dofs, (str, bytes)) or not hasattr(dofs, "__iter__"):
+            raise TypeError(f"dofs: expected a list of {n} names, got {type(dofs).__name__}")
         dofs = [str(d) for d in dofs]
         if len(dofs) != n:
             raise ValueError(f"dofs: expected {n} names, got {len(dofs)}")
@@ -135,7 +137,7 @@ class Model:
         self.name = str(name)
         self.effects = None
         self.python_laws: list[str] = []  # where each Python law sits ("effects[3]")
-        self.without = tuple(without)
+        self.without = (without,) if isinstance(without, str) else tuple(without)
         builtin, laws = [], []
         if effects is not None:
             effects = list(effects)
@@ -267,11 +269,12 @@ class Model:
 
     def evaluate_force(self, u, v, t: float = 0.0) -> np.ndarray:
         """K u + C v + F(u, v, t): everything on the left of M a + ... = 0."""
-        return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), float(t))
+        return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), _checks.real("t", t))
 
     def tangent_matrices(self, u, v, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """(K_t, C_t): derivatives of K u + C v + F(u, v, t) with respect to u and v."""
-        return self._core.tangent(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), float(t))
+        return self._core.tangent(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n),
+                                  _checks.real("t", t))
 
     def linearized_frequencies(self, u=None) -> np.ndarray:
         """Circular frequencies [rad/s] of the undamped model linearised at u (default: zero), ascending."""
@@ -290,6 +293,9 @@ class Model:
         regularised with a mass-proportional term, like an implicit dynamic
         step, until the tangent becomes regular.
         """
+        t = _checks.real("t", t)
+        rtol = _checks.real("rtol", rtol, positive=True)
+        max_iter = _checks.integer("max_iter", max_iter, minimum=1)
         u = np.zeros(self.n) if u_guess is None else _checks.vector("u_guess", u_guess, self.n).copy()
         v = np.zeros(self.n)
         mdiag = np.diag(self.mass_matrix)

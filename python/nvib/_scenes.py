@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 
+from . import _checks
 from ._model import Model
 
 if sys.version_info >= (3, 11):
@@ -78,7 +79,10 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         raise SceneError(f"{path}: [dofs] names: expected a list of strings")
     n = len(names)
-    m = np.asarray(mass, dtype=float)
+    try:
+        m = _checks.real_array("mass", mass)
+    except (TypeError, ValueError) as exc:
+        raise SceneError(f"{path}: [dofs] {exc}") from None
     if m.shape not in ((n,), (n, n)):
         raise SceneError(f"{path}: [dofs] mass: expected {n} entries (one per DOF) or a {n}x{n} matrix, "
                          f"got shape {m.shape}")
@@ -101,9 +105,15 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
             for dof, x in val.items():
                 if dof not in names:
                     raise SceneError(f"{path}: [initial] {key}: unknown DOF {dof!r}")
-                arr[names.index(dof)] = float(x)
+                try:
+                    arr[names.index(dof)] = _checks.real(f"{key}.{dof}", x)
+                except (TypeError, ValueError) as exc:
+                    raise SceneError(f"{path}: [initial] {exc}") from None
             return arr
-        arr = np.asarray(val, dtype=float)
+        try:
+            arr = _checks.real_array(key, val)
+        except (TypeError, ValueError) as exc:
+            raise SceneError(f"{path}: [initial] {exc}") from None
         if arr.shape != (n,):
             raise SceneError(f"{path}: [initial] {key}: expected {n} entries, got {arr.size}")
         return arr
@@ -120,12 +130,19 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
             model.u0 = model.static_equilibrium()
     except (ValueError, TypeError) as exc:
         raise SceneError(f"{path}: {exc}") from None
+    settings = {}
+    for key in ("dt", "t_end"):
+        if key in meta:
+            try:
+                settings[key] = _checks.real(key, meta[key], positive=key == "dt")
+            except (TypeError, ValueError) as exc:
+                raise SceneError(f"{path}: [scene] {exc}") from None
     model.scene = {
         "name": meta.get("name", os.path.basename(path)[:-5]),
         "title": meta.get("title", ""),
         "source": meta.get("source", ""),
-        "dt": float(meta["dt"]) if "dt" in meta else None,
-        "t_end": float(meta["t_end"]) if "t_end" in meta else None,
+        "dt": settings.get("dt"),
+        "t_end": settings.get("t_end"),
         "plot_dof": meta.get("plot_dof", names[0]),
         "path": path,
         "initial_u": "static_equilibrium" if static else "given",

@@ -47,7 +47,13 @@ class Energy:
 class Result:
     """A run: times ``t`` (n_saved,), histories ``u``, ``v``, ``a`` (n_saved, n_saved_dofs),
     the saved DOF names ``dofs``, counters ``stats`` and ``status``
-    ('success', 'diverged', 'newton_failed' or 'singular_matrix')."""
+    ('success', 'diverged', 'newton_failed' or 'singular_matrix').
+
+    ``max_residual``: for the implicit schemes, the largest equilibrium
+    residual of an accepted step relative to its force scale (below about
+    ``rtol`` with Newton; with ``iteration="none"``, which accepts every step
+    without an equilibrium check, the unbalance the run left); None for the
+    explicit schemes and for linear models (one solve is exact)."""
 
     def __init__(self, raw: dict, model: Model, scheme, dt: float):
         self.t = raw["t"]
@@ -60,6 +66,8 @@ class Result:
         self.status = raw["status"]
         self.failure = raw["failure"] if self.status != "success" else None
         self.num_steps_requested = raw["num_steps_requested"]
+        mr = raw.get("max_residual", math.nan)
+        self.max_residual = None if math.isnan(mr) else mr
         self.energy = Energy(raw["energy"]) if "energy" in raw else None
         self.scheme = scheme
         self.dt = dt
@@ -114,7 +122,15 @@ class Stepper:
     stats = property(lambda self: self._st.stats, doc="counters since construction")
     step_index = property(lambda self: self._st.step_index)
     last_residuals = property(lambda self: list(self._st.last_residuals),
-                              doc="Newton residual norms of the last step (implicit schemes)")
+                              doc="Newton residual norms of the last step (implicit schemes); with "
+                                  "iteration='none' the predictor's and the one left after the step")
+
+    @property
+    def accepted_residual(self) -> float | None:
+        """Equilibrium residual of the last accepted step relative to its force scale (implicit
+        schemes; None where it is not evaluated)."""
+        r = self._st.accepted_residual
+        return None if math.isnan(r) else r
 
     def state(self) -> np.ndarray:
         """The carried state as one vector: [u; v; a] followed by the scheme's history
@@ -173,17 +189,16 @@ class Stepper:
         return res
 
 
-BOUND_FACTOR = 1e10
-
-
 def default_max_displacement(u, v, duration: float) -> float:
     """The default divergence bound on |u_i|: 1e10 x max(1, max|u|, max|v| x duration).
 
     Far beyond any physical response of the model started from (u, v), yet
     reached long before a diverging state overflows, so such a run stops with
-    a message naming the DOF instead of running on with inf or NaN."""
-    scale = max(1.0, float(np.max(np.abs(u), initial=0.0)), float(np.max(np.abs(v), initial=0.0)) * duration)
-    return BOUND_FACTOR * scale
+    a message naming the DOF instead of running on with inf or NaN. The same
+    bound is the default of the C++ solve()."""
+    u = np.atleast_1d(_checks.real_array("u", u)).ravel()
+    v = np.atleast_1d(_checks.real_array("v", v)).ravel()
+    return _core.default_max_displacement(u, v, _checks.real("duration", duration))
 
 
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
@@ -195,7 +210,10 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     run whose state becomes non-finite or whose |u_i| exceeds
     ``max_displacement`` (default: ``default_max_displacement``, 1e10 times
     the scale of the initial state; ``math.inf`` for none) stops within one
-    step with status 'diverged'. If
+    step with status 'diverged'. Newton that does not converge stops the run
+    with status 'newton_failed' (the residual history in the failure);
+    ``iteration="none"`` never iterates and reports what it leaves unbalanced
+    in ``Result.max_residual``. If
     (t_end - t0)/dt is not an integer the run ends at the first multiple of dt
     past t_end. With ``throw=False`` a failed run returns its partial history
     with ``status`` set instead of raising. ``energy=True`` records the

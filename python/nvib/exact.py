@@ -23,9 +23,32 @@ import math
 import numpy as np
 
 
+def _params(**kw):
+    """Named checks: masses and stiffnesses > 0, the rest finite (a, c >= 0)."""
+    from ._checks import real
+
+    out = []
+    for name, x in kw.items():
+        x = real(name, x, positive=name in ("m", "k", "k0"))
+        if name in ("a", "c") and x < 0.0:
+            raise ValueError(f"{name}: must be >= 0, got {x}")
+        out.append(x)
+    return out
+
+
+def _times(t):
+    from ._checks import real_array
+
+    t = real_array("t", t)
+    if not np.all(np.isfinite(t)):
+        raise ValueError("t: contains NaN or Inf")
+    return t
+
+
 def linear_sdof(t, *, m: float, k: float, c: float = 0.0, x0: float = 1.0, v0: float = 0.0):
     """Displacement and velocity of the free linear oscillator (0 <= damping ratio < 1)."""
-    t = np.asarray(t, dtype=float)
+    m, k, c, x0, v0 = _params(m=m, k=k, c=c, x0=x0, v0=v0)
+    t = _times(t)
     w = math.sqrt(k / m)
     xi = c / (2.0 * m * w)
     if not 0.0 <= xi < 1.0:
@@ -43,8 +66,7 @@ def _hardening_parameters(m: float, k0: float, a: float, x0: float, v0: float) -
     """(amplitude A, frequency w, parameter m_e, phase w tau) of x = A cn(w (t + tau) | m_e)."""
     from scipy import special
 
-    if not (m > 0 and k0 > 0 and a >= 0):
-        raise ValueError(f"m, k0, a: the cn solution needs m > 0, k0 > 0 and a >= 0, got {m}, {k0}, {a}")
+    m, k0, a, x0, v0 = _params(m=m, k0=k0, a=a, x0=x0, v0=v0)
     if v0 == 0.0:
         amp = abs(x0)
     else:
@@ -66,7 +88,7 @@ def hardening(t, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: floa
     """Displacement and velocity of m x'' + k0 (1 + a x^2) x = 0, x(0) = x0, x'(0) = v0."""
     from scipy import special
 
-    t = np.asarray(t, dtype=float)
+    t = _times(t)
     amp, w, me, phase = _hardening_parameters(m, k0, a, x0, v0)
     sn, cn, dn, _ = special.ellipj(w * t + phase, me)
     return amp * cn, -amp * w * sn * dn
@@ -84,9 +106,10 @@ def hardening_period(*, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: 
 def _pendulum_parameters(omega0: float, theta0: float, v0: float) -> tuple[float, float]:
     """(modulus k, phase u0) of theta = 2 arcsin(k sn(w0 t + u0 | k^2))."""
     from scipy import special
+    from ._checks import real
 
-    if not omega0 > 0:
-        raise ValueError(f"omega0: must be > 0, got {omega0}")
+    omega0 = real("omega0", omega0, positive=True)
+    theta0, v0 = _params(theta0=theta0, v0=v0)
     s = math.sin(0.5 * theta0)
     k2 = s * s + v0 * v0 / (4.0 * omega0 * omega0)
     if not k2 < 1.0:
@@ -106,7 +129,7 @@ def pendulum(t, *, omega0: float = 1.0, theta0: float, v0: float = 0.0):
     theta'(0) = v0, for a swinging pendulum (it does not go over the top)."""
     from scipy import special
 
-    t = np.asarray(t, dtype=float)
+    t = _times(t)
     k, u0 = _pendulum_parameters(omega0, theta0, v0)
     sn, cn, _, _ = special.ellipj(omega0 * t + u0, k * k)
     return 2.0 * np.arcsin(k * sn), 2.0 * k * omega0 * cn
@@ -122,6 +145,9 @@ def pendulum_period(*, omega0: float = 1.0, theta0: float, v0: float = 0.0) -> f
 
 def hardening_energy(x, v, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0):
     """Kinetic plus potential energy m v^2/2 + k0 (x^2/2 + a x^4/4)."""
-    x = np.asarray(x, dtype=float)
-    v = np.asarray(v, dtype=float)
+    from ._checks import real_array
+
+    m, k0, a = _params(m=m, k0=k0, a=a)
+    x = real_array("x", x)
+    v = real_array("v", v)
     return 0.5 * m * v * v + k0 * (0.5 * x * x + 0.25 * a * x ** 4)

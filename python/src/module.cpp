@@ -239,6 +239,7 @@ struct AnyStepper {
   virtual Failure failure() const = 0;
   virtual std::string scheme_name() const = 0;
   virtual std::vector<double> last_residuals() const { return {}; }
+  virtual double accepted_residual() const { return std::numeric_limits<double>::quiet_NaN(); }
   virtual Result integrate(double t_end, const SolveOptions& opt, py::object observer) = 0;
   virtual Vector state() const = 0;
   virtual void set_state(double t, const Vector& x) = 0;
@@ -302,6 +303,12 @@ struct StepperImpl final : AnyStepper {
     else
       return {};
   }
+  double accepted_residual() const override {
+    if constexpr (has_accepted_residual<S>::value)
+      return s.accepted_residual();
+    else
+      return std::numeric_limits<double>::quiet_NaN();
+  }
   Vector state() const override { return s.state(); }
   void set_state(double t, const Vector& x) override { s.set_state(t, x); }
   Result integrate(double t_end, const SolveOptions& opt, py::object observer) override {
@@ -349,6 +356,7 @@ py::dict result_dict(Result&& r) {
   d["status"] = to_string(r.status);
   d["failure"] = failure_dict(r.failure);
   d["num_steps_requested"] = r.num_steps_requested;
+  d["max_residual"] = r.max_residual;
   if (r.energy.size() > 0) d["energy"] = py::cast(std::move(r.energy));
   return d;
 }
@@ -483,7 +491,8 @@ PYBIND11_MODULE(_core, m) {
       .def("__repr__", &CEMDTS::name);
 
   py::class_<Newmark>(m, "Newmark", "Newmark's method with Newton ('newton'), modified Newton ('modified') or the "
-                                    "incremental format without equilibrium iteration ('none').")
+                                    "incremental format ('none': one linearised solve per step, accepted without an "
+                                    "equilibrium check; the residual it leaves is reported in Result.max_residual).")
       .def(py::init([](double beta, double gamma, const std::string& it, int max_iter, double rtol, double atol,
                        const std::string& jac) {
              return Newmark(beta, gamma, parse_iteration(it), newton_options(max_iter, rtol, atol, jac));
@@ -509,7 +518,10 @@ PYBIND11_MODULE(_core, m) {
   };
   py::class_<GeneralizedAlpha>(m, "GeneralizedAlpha",
                                "Generalized-alpha (Chung & Hulbert 1993, alpha on the old level). Defaults are the "
-                               "paper's alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (= from_rho_inf(1)).")
+                               "paper's alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (= from_rho_inf(1)). "
+                               "iteration: 'newton', 'modified' or 'none' (the incremental format: one linearised "
+                               "solve per step, accepted without an equilibrium check; the residual it leaves is "
+                               "reported in Result.max_residual).")
       .def(py::init(ga_factory), py::arg("alpha_m") = 0.5, py::arg("alpha_f") = 0.5, py::arg("beta") = 0.25,
            py::arg("gamma") = 0.5, py::kw_only(), py::arg("iteration") = "newton", py::arg("max_iter") = 20,
            py::arg("rtol") = 1e-10, py::arg("atol") = 1e-12, py::arg("jacobian") = "analytic")
@@ -642,6 +654,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("failure", [](const AnyStepper& s) { return failure_dict(s.failure()); })
       .def_property_readonly("scheme_name", &AnyStepper::scheme_name)
       .def_property_readonly("last_residuals", &AnyStepper::last_residuals)
+      .def_property_readonly("accepted_residual", &AnyStepper::accepted_residual)
       .def("state", &AnyStepper::state, "the carried state [u; v; a; history...]")
       .def("set_state", &AnyStepper::set_state, py::arg("t"), py::arg("x"))
       .def(
@@ -658,7 +671,7 @@ PYBIND11_MODULE(_core, m) {
             return result_dict(s.integrate(t_end, opt, std::move(observer)));
           },
           py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
-          py::arg("max_displacement") = std::numeric_limits<double>::infinity(), py::arg("observe_every") = 4096,
+          py::arg("max_displacement") = std::numeric_limits<double>::quiet_NaN(), py::arg("observe_every") = 4096,
           py::arg("observer") = py::none(), py::arg("energy") = false);
 
   def_all_schemes<HybridModel>(m);
@@ -667,4 +680,6 @@ PYBIND11_MODULE(_core, m) {
   m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,
         "Matrix exponential by the 2^N algorithm of the precise integration method.");
   m.def("steps_to_reach", &steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"));
+  m.def("default_max_displacement", &nvib::default_max_displacement, py::arg("u"), py::arg("v"),
+        py::arg("duration"));
 }

@@ -4,6 +4,7 @@
 #include <nvib/nvib.hpp>
 
 #include <functional>
+#include <limits>
 #include <string>
 
 #include "check.hpp"
@@ -48,6 +49,17 @@ double fitted_order(const Scheme& s, double c) {
   }
   return (m * sxy - sx * sy) / (m * sxx - sx * sx);
 }
+
+// Finite forces whose tangent overflows on DOF 1.
+struct OverflowingTangent {
+  void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::VecRef out) const { out = u; }
+  void tangent(const nvib::CVecRef&, const nvib::CVecRef&, double, nvib::MatRef K, nvib::MatRef C) const {
+    K.setIdentity();
+    K(1, 1) = std::numeric_limits<double>::infinity();
+    C.setZero();
+  }
+  bool uses_velocity() const { return false; }
+};
 
 struct Hardening {
   void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::VecRef out) const {
@@ -175,6 +187,42 @@ int main() {
       newton_failed = e.failure.residuals.size() == 2 && e.failure.step == 1;
     }
     CHECK(newton_failed);
+
+    // The default bound (NaN in SolveOptions) is 1e10 x max(1, |u0|, |v0| T):
+    // a diverging run stops there, naming the DOF, long before overflow.
+    auto d = nvib::solve(stiff, nvib::CentralDifference(), 3e-3, 10.0, u0, v0, opt);
+    CHECK(d.status == nvib::Status::diverged && d.failure.dof == 0);
+    CHECK(d.failure.message.find("beyond the bound 1e+10") != std::string::npos);
+    CHECK(d.u.cwiseAbs().maxCoeff() <= 1e10);
+    CHECK(nvib::default_max_displacement(Vector::Constant(1, -3.0), Vector::Constant(1, 2.0), 5.0) == 1e11);
+    nvib::SolveOptions unbounded = opt;
+    unbounded.max_displacement = std::numeric_limits<double>::infinity();
+    auto e = nvib::solve(stiff, nvib::CentralDifference(), 3e-3, 10.0, u0, v0, unbounded);
+    CHECK(e.status == nvib::Status::diverged && e.failure.message.find("not finite") != std::string::npos);
+
+    // The incremental format accepts each step after one solve, and reports
+    // the residual it leaves; Newton reports at most about rtol.
+    const Vector x0 = Vector::Constant(1, 1.5);
+    auto none = nvib::solve(hard, nvib::Newmark(0.25, 0.5, nvib::Iteration::none), 1e-2, 0.3, x0, v0);
+    auto newton = nvib::solve(hard, nvib::Newmark(), 1e-2, 0.3, x0, v0);
+    auto expl = nvib::solve(hard, nvib::CEMDTS(), 1e-3, 0.3, x0, v0);
+    CHECK(none.max_residual > 1e-3);
+    CHECK(newton.max_residual <= 1e-9);
+    CHECK(std::isnan(expl.max_residual));
+    CHECK(none.stats.num_force_evals == 2 * 30 + 1);
+    auto st = nvib::make_stepper(nvib::Newmark(0.25, 0.5, nvib::Iteration::none), hard, 1e-2);
+    st.initialize(0.0, x0, v0);
+    st.step();
+    CHECK(st.last_residuals().size() == 2 && st.last_residuals()[1] > 0.0);
+    CHECK(st.accepted_residual() > 0.0);
+
+    // A tangent that overflows is divergence at that DOF, not a singular matrix.
+    auto inf_tangent = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(2)), OverflowingTangent{});
+    nvib::SolveOptions quiet;
+    quiet.throw_on_failure = false;
+    auto f = nvib::solve(inf_tangent, nvib::Newmark(), 1e-2, 0.1, Vector::Ones(2), Vector::Zero(2), quiet);
+    CHECK(f.status == nvib::Status::diverged && f.failure.dof == 1 && f.failure.step == 1);
+    CHECK(f.failure.message.find("tangent of the forces is not finite at DOF 1") != std::string::npos);
   }
 
   // Validation names the parameter and never clamps.

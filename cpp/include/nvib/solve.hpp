@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstring>
 #include <limits>
+#include <type_traits>
 #include <utility>
 
 #include "core/stepper.hpp"
@@ -22,7 +23,9 @@ struct SolveOptions {
   std::int64_t save_every = 1;  // save steps 0, k, 2k, ... and always the last one
   std::vector<Index> dofs;      // DOFs to save; empty means all
   // |u_i| beyond this bound counts as divergence (non-finite states always do).
-  double max_displacement = std::numeric_limits<double>::infinity();
+  // NaN (the default) means default_max_displacement() of the initial state;
+  // infinity means no bound.
+  double max_displacement = std::numeric_limits<double>::quiet_NaN();
   bool throw_on_failure = true;
   std::int64_t observe_every = 4096;  // steps between observer calls
   // Record kinetic and potential energy, work of the loads, dissipated energy
@@ -43,7 +46,26 @@ struct Result {
   Status status = Status::success;
   Failure failure;
   std::int64_t num_steps_requested = 0;
+  // Largest equilibrium residual of an accepted step relative to its force
+  // scale (implicit schemes; NaN for the others and for linear models, whose
+  // single solve is exact up to round-off). Newton keeps it below about rtol;
+  // iteration = none reports here what it leaves unbalanced.
+  double max_residual = std::numeric_limits<double>::quiet_NaN();
 };
+
+// Scale factor of the default divergence bound.
+constexpr double kBoundFactor = 1e10;
+
+// The default bound on |u_i|: 1e10 x max(1, max|u|, max|v| T) for a run of
+// duration T from (u, v). Far beyond any physical response of a model started
+// there, yet reached long before a diverging state overflows, so such a run
+// stops naming the DOF instead of running on with inf or NaN.
+inline double default_max_displacement(const Vector& u, const Vector& v, double duration) {
+  double scale = 1.0;
+  if (u.size() > 0) scale = std::max(scale, u.cwiseAbs().maxCoeff());
+  if (v.size() > 0) scale = std::max(scale, v.cwiseAbs().maxCoeff() * std::abs(duration));
+  return kBoundFactor * scale;
+}
 
 // Number of steps to reach t_end: t_end/dt rounded when it is an integer up
 // to round-off, else rounded up (the run then ends at the first multiple of dt past t_end).
@@ -118,6 +140,13 @@ inline bool rates_ok(const Vector& v, const Vector& a) {
   return !((detail::nonfinite_bits(v) | detail::nonfinite_bits(a)) >> 63);
 }
 
+// Steppers that measure the equilibrium residual of each accepted step (the implicit ones).
+template <class S, class = void>
+struct has_accepted_residual : std::false_type {};
+template <class S>
+struct has_accepted_residual<S, std::void_t<decltype(std::declval<const S&>().accepted_residual())>>
+    : std::true_type {};
+
 struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
@@ -129,7 +158,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   const Index n = st.size();
   detail::require(opt.save_every >= 1, "save_every: must be >= 1, got " + std::to_string(opt.save_every));
   detail::require(opt.observe_every >= 1, "observe_every: must be >= 1");
-  detail::require(opt.max_displacement > 0.0, "max_displacement: must be > 0 (infinity for no bound)");
+  detail::require(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0,
+                  "max_displacement: must be > 0 (infinity for no bound, NaN for the default)");
   for (Index d : opt.dofs)
     detail::require(d >= 0 && d < n, "dofs: index " + std::to_string(d) + " is out of range for " +
                                          std::to_string(n) + " degrees of freedom");
@@ -202,7 +232,10 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   const double h = st.dt();
 
   const Stats before = st.stats();
-  const double bound = opt.max_displacement;
+  const double bound = std::isnan(opt.max_displacement)
+                           ? default_max_displacement(st.u(), st.v(), t_end - st.time())
+                           : opt.max_displacement;
+  double max_residual = std::numeric_limits<double>::quiet_NaN();
   // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
   std::int64_t to_save = k, to_observe = opt.observe_every;
   for (std::int64_t i = 1; i <= nsteps; ++i) {
@@ -222,6 +255,10 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     if (s != Status::success) {
       res.status = s;
       break;
+    }
+    if constexpr (has_accepted_residual<Stepper>::value) {
+      const double r = st.accepted_residual();
+      if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
     }
     if (opt.energy) {
       const double q_in = model.input_power(st.u(), st.v(), st.time()), q_diss = model.dissipated_power(st.v());
@@ -246,6 +283,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     res.a.conservativeResize(row, m);
     if (opt.energy) res.energy.conservativeResize(row, 5);
   }
+  res.max_residual = max_residual;
   res.stats = st.stats();
   res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
   res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();

@@ -15,6 +15,8 @@ class Mass {
       detail::require(std::isfinite(m[i]), "mass: entry " + std::to_string(i) + " is not finite");
       detail::require(m[i] > 0.0, "mass: entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
                                       ", every mass must be > 0");
+      detail::require(std::isfinite(1.0 / m[i]), "mass: entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
+                                                     ", too small for its inverse to be finite");
     }
     Mass out;
     out.diag_ = true;

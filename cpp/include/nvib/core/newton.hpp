@@ -9,8 +9,11 @@ namespace nvib {
 
 // newton: full Newton-Raphson (tangent every iteration);
 // modified: tangent and factorisation once per step;
-// none: the incremental format, one linearised solve per step and no
-//       equilibrium iteration (what Yang et al. 2017 use, section 6).
+// none: the incremental format (what Yang et al. 2017 use, section 6): one
+//       linearised solve per step, and the step is accepted without an
+//       equilibrium check. The residual it leaves is evaluated (one more force
+//       evaluation per step) and reported, never enforced: see
+//       last_residuals() and Result::max_residual.
 enum class Iteration { newton, modified, none };
 enum class Jacobian { analytic, finite_difference };
 

@@ -116,6 +116,10 @@ class StepperBase {
     v_ = v0;
     failure_ = Failure{};
     model_.acceleration(u_, v_, t0_, a_, stats_);
+    // Every scheme would carry inf or NaN from the first step on: refuse the start.
+    for (Index i = 0; i < a_.size(); ++i)
+      detail::require(std::isfinite(a_[i]), "u0, v0: the initial acceleration is not finite (a[" + std::to_string(i) +
+                                                "] = " + detail::fmt(a_[i]) + "): the forces overflow at the initial state");
   }
 
   // Time the step under way is heading for (computed, never accumulated).

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <algorithm>
+#include <limits>
 #include <string>
 
 #include "../core/newton.hpp"
@@ -116,13 +117,7 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   }
 
   void initialize(double t0, const Vector& u0, const Vector& v0) {
-    this->check_initial(t0, u0, v0);
-    this->t0_ = t0;
-    n_ = 0;
-    u_ = u0;
-    v_ = v0;
-    this->failure_ = Failure{};
-    model_.acceleration(u_, v_, t0, a_, stats_);
+    this->start(t0, u0, v0);
     factorized_ = false;
   }
 
@@ -142,33 +137,30 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     u1_ = u_;  // constant-displacement predictor (the incremental format's starting point)
     update_kinematics(c0);
     const double ta = t1 - af * h;
+    accepted_residual_ = std::numeric_limits<double>::quiet_NaN();
     for (int k = 0;; ++k) {
-      // alpha point: x_{n+1-af} = (1-af) x_{n+1} + af x_n
-      ua_ = (1.0 - af) * u1_ + af * u_;
-      va_ = (1.0 - af) * v1_ + af * v_;
-      model_.force(ua_, va_, ta, G1_, stats_);
-      // r = (1-am) M a1 + am M a_n + G(alpha point)
-      model_.mass().apply(a1_, r_);
-      r_ *= (1.0 - am);
-      double fscale = r_.template lpNorm<Eigen::Infinity>();
-      if (am != 0.0) {
-        model_.mass().apply(a_, w_);
-        r_ += am * w_;
-        fscale = std::max(fscale, std::abs(am) * w_.template lpNorm<Eigen::Infinity>());
-      }
-      r_ += G1_;
-      fscale = std::max(fscale, G1_.template lpNorm<Eigen::Infinity>());
-      const double rnorm = r_.template lpNorm<Eigen::Infinity>();
+      double fscale = 0.0;
+      const double rnorm = residual(ta, fscale);
       residuals_.push_back(rnorm);
-      if (!std::isfinite(rnorm)) return this->fail(Status::diverged, rnorm, "non-finite Newton residual");
+      if (!std::isfinite(rnorm)) return nonfinite_residual(t1);
       const double tol = p_.newton.atol + p_.newton.rtol * fscale;
-      if (k > 0 && (rnorm <= tol || du_small_)) break;
-      if (k == 0 && rnorm == 0.0) break;  // the predictor is in equilibrium to the last bit
+      // A negligible increment ends the iteration only once the residual has
+      // stopped falling: then it sits at its round-off floor (forces that
+      // cancel, as at a static preload). While it still falls, Newton goes on.
+      if (k > 0 && (rnorm <= tol || (du_small_ && rnorm >= residuals_[static_cast<size_t>(k) - 1]))) {
+        accepted_residual_ = relative(rnorm, fscale);
+        break;
+      }
+      if (k == 0 && rnorm == 0.0) {  // the predictor is in equilibrium to the last bit
+        accepted_residual_ = 0.0;
+        break;
+      }
       if (k >= p_.newton.max_iter) return newton_failure(t1, tol);
 
       const bool refactor = linear ? !factorized_ : (k == 0 || p_.iteration == Iteration::newton);
       if (refactor) {
         model_.tangent(ua_, va_, ta, Kt_, Ct_, stats_, fd);
+        if (!Kt_.allFinite() || !Ct_.allFinite()) return nonfinite_tangent(t1);
         S_.setZero();
         model_.mass().add_to(S_, (1.0 - am) * c0);
         if (model_.uses_velocity()) S_.noalias() += ((1.0 - af) * c1) * Ct_;
@@ -176,7 +168,10 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
         lu_.compute(S_);
         ++stats_.num_factorizations;
         factorized_ = true;
-        if (!lu_ok()) return this->fail(Status::singular_matrix, rnorm, "singular iteration matrix at t = " + detail::fmt(t1));
+        if (!lu_ok())
+          return this->fail(Status::singular_matrix, rnorm,
+                            "singular iteration matrix at t = " + detail::fmt(t1) + " (step " +
+                                std::to_string(n_ + 1) + ")");
       }
       du_.noalias() = lu_.solve(r_);
       du_ = -du_;
@@ -186,7 +181,18 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
       update_kinematics(c0);
       du_small_ = du_.template lpNorm<Eigen::Infinity>() <=
                   p_.newton.atol + 1e-3 * p_.newton.rtol * u1_.template lpNorm<Eigen::Infinity>();
-      if (linear || p_.iteration == Iteration::none) break;  // one linearised solve per step
+      // A linear model is in equilibrium after one solve, up to round-off.
+      if (linear) break;
+      if (p_.iteration == Iteration::none) {
+        // The incremental format accepts the step without iterating, but not
+        // unseen: the residual left at the new state is measured (one force
+        // evaluation) and reported, in last_residuals() and Result::max_residual.
+        const double after = residual(ta, fscale);
+        residuals_.push_back(after);
+        if (!std::isfinite(after)) return nonfinite_residual(t1);
+        accepted_residual_ = relative(after, fscale);
+        break;
+      }
     }
     u_.swap(u1_);
     v_.swap(v1_);
@@ -194,7 +200,66 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     return this->advance();
   }
 
+  // Residual of the last accepted step relative to its force scale:
+  // ||r||inf / (f + atol/rtol), f the largest inertia or force term, so at
+  // most rtol after Newton converges; the equilibrium error left by
+  // iteration = none; NaN where not evaluated (a linear model, exact after one solve).
+  double accepted_residual() const { return accepted_residual_; }
+
  private:
+  // r_ = (1-am) M a1 + am M a_n + G(alpha point) and its max-norm; fscale is the
+  // largest of the three terms.
+  double residual(double ta, double& fscale) {
+    const double am = p_.alpha_m, af = p_.alpha_f;
+    // alpha point: x_{n+1-af} = (1-af) x_{n+1} + af x_n
+    ua_ = (1.0 - af) * u1_ + af * u_;
+    va_ = (1.0 - af) * v1_ + af * v_;
+    model_.force(ua_, va_, ta, G1_, stats_);
+    model_.mass().apply(a1_, r_);
+    r_ *= (1.0 - am);
+    fscale = r_.template lpNorm<Eigen::Infinity>();
+    if (am != 0.0) {
+      model_.mass().apply(a_, w_);
+      r_ += am * w_;
+      fscale = std::max(fscale, std::abs(am) * w_.template lpNorm<Eigen::Infinity>());
+    }
+    r_ += G1_;
+    fscale = std::max(fscale, G1_.template lpNorm<Eigen::Infinity>());
+    return r_.template lpNorm<Eigen::Infinity>();
+  }
+  // In the units of the relative tolerance: rnorm <= atol + rtol fscale is
+  // relative() <= rtol, so a converged step reports at most rtol.
+  double relative(double rnorm, double fscale) const {
+    const double floor = p_.newton.rtol > 0.0 ? p_.newton.atol / p_.newton.rtol : 0.0;
+    const double scale = fscale + floor;
+    return scale > 0.0 ? rnorm / scale : rnorm;
+  }
+
+  // An overflowing force overflows its tangent too: that is divergence, not a singular matrix.
+  Status nonfinite_tangent(double t1) {
+    Index dof = 0;
+    while (dof + 1 < Kt_.rows() && Kt_.row(dof).allFinite() && Ct_.row(dof).allFinite()) ++dof;
+    this->fail(Status::diverged, residuals_.back(),
+               "diverged at t = " + detail::fmt(t1) + " (step " + std::to_string(n_ + 1) +
+                   "): the tangent of the forces is not finite at DOF " + std::to_string(dof));
+    this->failure_.dof = dof;
+    this->failure_.residuals = residuals_;
+    return Status::diverged;
+  }
+
+  // Names the first non-finite residual entry, the time and the step.
+  Status nonfinite_residual(double t1) {
+    Index dof = 0;
+    while (dof + 1 < r_.size() && std::isfinite(r_[dof])) ++dof;
+    this->fail(Status::diverged, residuals_.back(),
+               "diverged at t = " + detail::fmt(t1) + " (step " + std::to_string(n_ + 1) +
+                   "): the equilibrium residual is not finite at DOF " + std::to_string(dof) + " (residual[" +
+                   std::to_string(dof) + "] = " + detail::fmt(r_[dof]) + ")");
+    this->failure_.dof = dof;
+    this->failure_.residuals = residuals_;
+    return Status::diverged;
+  }
+
   // a1, v1 from u1 by the Newmark relations.
   void update_kinematics(double c0) {
     const double h = h_, beta = p_.beta, gamma = p_.gamma;
@@ -211,8 +276,8 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   Status newton_failure(double t1, double tol) {
     this->fail(Status::newton_failed, residuals_.back(),
                "Newton did not converge in " + std::to_string(p_.newton.max_iter) + " iterations at t = " +
-                   detail::fmt(t1) + " (residual " + detail::fmt(residuals_.back()) + " > tolerance " +
-                   detail::fmt(tol) + ")");
+                   detail::fmt(t1) + " (step " + std::to_string(n_ + 1) + "; residual " +
+                   detail::fmt(residuals_.back()) + " > tolerance " + detail::fmt(tol) + ")");
     this->failure_.residuals = residuals_;
     return Status::newton_failed;
   }
@@ -223,6 +288,7 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   Eigen::PartialPivLU<Matrix> lu_;
   bool factorized_ = false;
   bool du_small_ = false;
+  double accepted_residual_ = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> residuals_;
 };
 

@@ -1,0 +1,69 @@
+"""Ctrl-C stops a long run of a C++-only model (no Python in the loop, the GIL
+released): the solve loop checks for signals every few thousand steps, at
+most every 0.1 s. A real SIGINT is sent to the process from another thread
+while the main thread is inside the C++ loop."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import pytest
+
+import nvib
+
+pytestmark = pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs POSIX signals")
+
+DELAY = 0.3  # s before the signal
+
+
+def hardening():
+    model = nvib.load_scene("hardening")
+    assert model._core.__class__.__name__ == "EffectModel"  # C++ only: the GIL is released during the run
+    return model
+
+
+@pytest.fixture
+def python_sigint_handler():
+    """The interpreter's own SIGINT handler (KeyboardInterrupt), whatever the test runner installed."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def interrupt_after(delay: float) -> dict:
+    sent = {}
+
+    def fire():
+        sent["at"] = time.perf_counter()
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Timer(delay, fire).start()
+    return sent
+
+
+@pytest.mark.parametrize("scheme", [nvib.CentralDifference(), nvib.Newmark(), nvib.PreciseIntegration()],
+                         ids=lambda s: type(s).__name__)
+def test_sigint_stops_a_long_cpp_only_solve(scheme, python_sigint_handler):
+    # 1e13 steps: days of work, so only the interrupt can end it
+    sent = interrupt_after(DELAY)
+    with pytest.raises(KeyboardInterrupt):
+        nvib.solve(hardening(), scheme, dt=1e-3, t_end=1e10, save_every=10**12)
+    stopped = time.perf_counter()
+    assert "at" in sent
+    assert stopped - sent["at"] < 5.0, f"stopped {stopped - sent['at']:.2f} s after the signal"
+
+
+def test_sigint_stops_stepper_integrate_and_the_stepper_stays_usable(python_sigint_handler):
+    st = nvib.Stepper(hardening(), nvib.CEMDTS(), 1e-3)
+    sent = interrupt_after(DELAY)
+    with pytest.raises(KeyboardInterrupt):
+        st.integrate(1e10, save_every=10**12)
+    assert time.perf_counter() - sent["at"] < 5.0
+    # the stepper holds the state reached when the run stopped, and continues from it
+    t = st.t
+    assert t > 0.0
+    res = st.integrate(t + 0.01)
+    assert res.success and res.t[0] == t
