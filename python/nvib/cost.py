@@ -59,6 +59,7 @@ import time
 import numpy as np
 
 from . import _checks, _core
+from ._labels import scheme_label
 from ._model import Model
 from ._solve import SCHEMES, solve
 from .reference import SCALE_FLOOR, FirstOrder, Reference, reference as _reference
@@ -71,31 +72,6 @@ FIELDS = ("contender", "scheme", "label", "dt", "rtol", "t_end", "dofs", "max_er
           "message", "reference")
 NAN = float("nan")
 INF = float("inf")
-
-
-def scheme_label(scheme) -> str:
-    """A short name: LCDM, CEMDTS(0.45), Newmark (none), GαM(0.5,0.5) (newton), PIM, ..."""
-    def g(x):
-        return f"{x:g}"
-
-    if isinstance(scheme, _core.CentralDifference):
-        return "LCDM" if scheme.velocity == "synchronized" else "LCDM (half-step v)"
-    if isinstance(scheme, _core.CEMDTS):
-        return f"CEMDTS({g(scheme.eta)})"
-    if isinstance(scheme, _core.Zhai):
-        return f"Zhai({g(scheme.psi)},{g(scheme.phi)})"
-    if isinstance(scheme, _core.Newmark):
-        params = "" if (scheme.beta, scheme.gamma) == (0.25, 0.5) else f"({g(scheme.beta)},{g(scheme.gamma)})"
-        return f"Newmark{params} ({scheme.iteration})"
-    if isinstance(scheme, _core.GeneralizedAlpha):
-        params = f"({g(scheme.alpha_m)},{g(scheme.alpha_f)})"
-        if (scheme.beta, scheme.gamma) != (0.25, 0.5):
-            params = f"({g(scheme.alpha_m)},{g(scheme.alpha_f)},{g(scheme.beta)},{g(scheme.gamma)})"
-        return f"GαM{params} ({scheme.iteration})"
-    if isinstance(scheme, _core.PreciseIntegration):
-        default = (scheme.squarings, scheme.order, scheme.corrections) == (20, 2, 1)
-        return "PIM" if default else f"PIM(order {scheme.order}, {scheme.corrections} corr.)"
-    return str(getattr(scheme, "name", scheme))
 
 
 def _row(**kw) -> dict:

@@ -49,11 +49,10 @@ Chung J., Hulbert G.M., J. Appl. Mech. 60 (1993) 371-375.
 from __future__ import annotations
 
 import math
-from fractions import Fraction
 
 import numpy as np
 
-from . import _checks
+from . import _checks, _labels
 from ._errors import NvibError
 from ._model import Model
 from ._solve import Stepper, _check_scheme
@@ -330,33 +329,9 @@ def critical_omega_h(scheme, xi: float = 0.0, *, omega_max: float = OMEGA_LIMIT,
 # ---------------------------------------------------------------- labels and plot
 
 def scheme_label(scheme) -> str:
-    """A short name for tables and legends: LCDM, CEMDTS(eta=0.45), Zhai(psi, phi),
-    Newmark(beta, gamma), G-alpha(alpha_m, alpha_f, beta, gamma), PIM(N=squarings, order=order)."""
-    from . import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration, Zhai
-
-    def g(x: float) -> str:  # 0.25 and 0.6 as such, but 1/6 rather than 0.1667
-        if float(f"{x:.2f}") == x:
-            return f"{x:g}"
-        for den in range(2, 13):
-            num = round(x * den)
-            if abs(x * den - num) < 1e-12 and 0 < abs(num) < den:
-                return str(Fraction(num, den))
-        return f"{x:.4g}"
-
-    if isinstance(scheme, CentralDifference):
-        return "LCDM" if scheme.velocity == "synchronized" else "LCDM(half_step)"
-    if isinstance(scheme, CEMDTS):
-        return f"CEMDTS(eta={g(scheme.eta)})"
-    if isinstance(scheme, Zhai):
-        return f"Zhai({g(scheme.psi)}, {g(scheme.phi)})"
-    if isinstance(scheme, Newmark):
-        return f"Newmark({g(scheme.beta)}, {g(scheme.gamma)})"
-    if isinstance(scheme, GeneralizedAlpha):
-        return f"G-alpha({g(scheme.alpha_m)}, {g(scheme.alpha_f)}, {g(scheme.beta)}, {g(scheme.gamma)})"
-    if isinstance(scheme, PreciseIntegration):
-        return f"PIM(N={scheme.squarings}, order={scheme.order})"
+    """A short name for tables and legends (the equilibrium iteration left out: it changes nothing here)."""
     _check_scheme(scheme)
-    return repr(scheme)
+    return _labels.scheme_label(scheme, iteration=False)
 
 
 def plot_spectral_radius(schemes, path: str, *, xi: float = 0.0, omega_h=None, labels=None,
