@@ -107,7 +107,7 @@ class CEMDTS:
         ...
 class Newmark:
     """
-    Newmark's method with Newton ('newton'), modified Newton ('modified') or the incremental format without equilibrium iteration ('none').
+    Newmark's method with Newton ('newton'), modified Newton ('modified') or the incremental format ('none': one linearised solve per step, accepted without an equilibrium check; the residual it leaves is reported in Result.max_residual).
     """
     def __init__(self, beta: typing.SupportsFloat | typing.SupportsIndex = 0.25, gamma: typing.SupportsFloat | typing.SupportsIndex = 0.5, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> None:
         ...
@@ -145,7 +145,7 @@ class Newmark:
         ...
 class GeneralizedAlpha:
     """
-    Generalized-alpha (Chung & Hulbert 1993, alpha on the old level). Defaults are the paper's alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (= from_rho_inf(1)).
+    Generalized-alpha (Chung & Hulbert 1993, alpha on the old level). Defaults are the paper's alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (= from_rho_inf(1)). iteration: 'newton', 'modified' or 'none' (the incremental format: one linearised solve per step, accepted without an equilibrium check; the residual it leaves is reported in Result.max_residual).
     """
     @staticmethod
     def from_rho_inf(rho_inf: typing.SupportsFloat | typing.SupportsIndex, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> GeneralizedAlpha:
@@ -341,7 +341,7 @@ class HybridModel:
 class Stepper:
     def initialize(self, t0: typing.SupportsFloat | typing.SupportsIndex, u0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
         ...
-    def integrate(self, t_end: typing.SupportsFloat | typing.SupportsIndex, save_every: typing.SupportsInt | typing.SupportsIndex = 1, dofs: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], max_displacement: typing.SupportsFloat | typing.SupportsIndex = ..., observe_every: typing.SupportsInt | typing.SupportsIndex = 4096, observer: typing.Any = None, energy: bool = False) -> dict:
+    def integrate(self, t_end: typing.SupportsFloat | typing.SupportsIndex, save_every: typing.SupportsInt | typing.SupportsIndex = 1, dofs: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], max_displacement: typing.SupportsFloat | typing.SupportsIndex = ..., observe_every: typing.SupportsInt | typing.SupportsIndex = 4096, observer: typing.Any = None, energy: bool = False, max_energy_error: typing.SupportsFloat | typing.SupportsIndex = ...) -> dict:
         ...
     def set_state(self, t: typing.SupportsFloat | typing.SupportsIndex, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
         ...
@@ -355,13 +355,13 @@ class Stepper:
     def a(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
         ...
     @property
+    def accepted_residual(self) -> float:
+        ...
+    @property
     def dt(self) -> float:
         ...
     @property
     def failure(self) -> dict:
-        ...
-    @property
-    def accepted_residual(self) -> float:
         ...
     @property
     def last_residuals(self) -> list[float]:

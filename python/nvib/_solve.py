@@ -167,8 +167,9 @@ class Stepper:
                 raise error_for(status, self._st.failure, None)
 
     def integrate(self, t_end: float, *, save_every: int = 1, dofs=None, throw: bool = True,
-                  max_displacement: float | None = None, progress=None, energy: bool = False) -> Result:
-        """Continue to t_end and return the saved history of this stretch."""
+                  max_displacement: float | None = None, progress=None, energy: bool = False,
+                  max_energy_error: float | None = None) -> Result:
+        """Continue to t_end and return the saved history of this stretch (options as in ``solve``)."""
         t_end = _checks.real("t_end", t_end)
         if t_end <= self.t:
             raise ValueError(f"t_end: must be > the current time {self.t}, got {t_end}")
@@ -181,12 +182,26 @@ class Stepper:
             bound = _checks.real("max_displacement", max_displacement, positive=True)
         if progress is not None and not callable(progress):
             raise TypeError("progress: expected a callable progress(step, n_steps)")
+        if not isinstance(energy, bool):
+            raise TypeError(f"energy: expected True or False, got {type(energy).__name__}")
+        if max_energy_error is None:
+            energy_limit = DEFAULT_MAX_ENERGY_ERROR if energy else math.inf
+        elif isinstance(max_energy_error, (int, float)) and max_energy_error == math.inf:
+            energy_limit = math.inf
+        else:
+            energy_limit = _checks.real("max_energy_error", max_energy_error, positive=True)
+            if not energy:
+                raise ValueError("max_energy_error: needs the energy accounting (energy=True)")
         raw = self._st.integrate(t_end, save_every, _dof_indices(self.model, dofs), bound, 4096, progress,
-                                 bool(energy))
+                                 energy, energy_limit)
         res = Result(raw, self.model, self.scheme, self.dt)
         if throw and res.status != "success":
             raise error_for(res.status, res.failure, res)
         return res
+
+
+# With energy=True, a run whose energy balance error exceeds half the energy scale stops as diverged.
+DEFAULT_MAX_ENERGY_ERROR = 0.5
 
 
 def default_max_displacement(u, v, duration: float) -> float:
@@ -203,7 +218,7 @@ def default_max_displacement(u, v, duration: float) -> float:
 
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
           save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
-          progress=None, energy: bool = False) -> Result:
+          progress=None, energy: bool = False, max_energy_error: float | None = None) -> Result:
     """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. A
@@ -217,7 +232,13 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     (t_end - t0)/dt is not an integer the run ends at the first multiple of dt
     past t_end. With ``throw=False`` a failed run returns its partial history
     with ``status`` set instead of raising. ``energy=True`` records the
-    energy accounting (``Result.energy``) for models of declared effects.
+    energy accounting (``Result.energy``) for models of declared effects,
+    and then also checks it every step: a run whose energy balance error
+    exceeds ``max_energy_error`` (default 0.5) times the energy scale (the
+    largest |kinetic| + |potential| + |work in| + |dissipated| so far) stops
+    as diverged. That catches an instability that stays finite, such as a
+    vehicle launched off its rails, which no displacement bound sees; a sound
+    run's balance error is orders of magnitude smaller. ``math.inf`` turns it off.
     """
     _check_model(model)
     _check_scheme(scheme)
@@ -231,7 +252,7 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     st = Stepper(model, scheme, dt, t0=t0, u0=u0, v0=v0)
     init = st.stats
     res = st.integrate(t_end, save_every=save_every, dofs=dofs, throw=False, max_displacement=max_displacement,
-                       progress=progress, energy=energy)
+                       progress=progress, energy=energy, max_energy_error=max_energy_error)
     res.stats = _add_stats(res.stats, init)
     if throw and res.status != "success":
         raise error_for(res.status, res.failure, res)

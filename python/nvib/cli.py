@@ -486,7 +486,8 @@ def _run_checked(args) -> int:
         raise _Usage("--dt", f"the scene {model.scene['name']!r} sets no dt; give --dt")
     if t_end is None:
         raise _Usage("--t-end", f"the scene {model.scene['name']!r} sets no t_end; give --t-end")
-    known = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement"}
+    known = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
+             "max_energy_error": "--max-energy-error"}
     try:
         n_steps = _core.steps_to_reach(0.0, t_end, dt)
     except (ValueError, OverflowError) as exc:
@@ -501,7 +502,8 @@ def _run_checked(args) -> int:
     t0 = time.perf_counter()
     try:
         res = solve(model, scheme, dt=dt, t_end=t_end, save_every=save_every, throw=False,
-                    max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy)
+                    max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy,
+                    max_energy_error=args.max_energy_error)
     except KeyboardInterrupt:
         bar.close(done=False)
         print("nvib run: interrupted", file=sys.stderr)
@@ -737,7 +739,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stop as diverged once some |u_i| exceeds U (default: 1e10 x max(1, max|u0|, "
                         "max|v0| x duration); 'inf': only non-finite states)")
     g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
-    g.add_argument("--energy", action="store_true", help="record the energy balance")
+    g.add_argument("--energy", action="store_true",
+                   help="record the energy balance; a run whose balance error exceeds --max-energy-error times "
+                        "the energy scale stops as diverged")
+    g.add_argument("--max-energy-error", type=_bound, metavar="F",
+                   help="with --energy: stop as diverged once the energy balance error exceeds F times the energy "
+                        "scale (default 0.5; 'inf': no check)")
     g = p.add_argument_group("output")
     g.add_argument("--out", metavar="FILE", help="write the history to FILE.npz or FILE.csv")
     g.add_argument("--plot", metavar="PNG", help="write histories, phase locus (and energy) to this PNG")

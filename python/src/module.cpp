@@ -660,9 +660,10 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "integrate",
           [](AnyStepper& s, double t_end, std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
-             std::int64_t observe_every, py::object observer, bool energy) {
+             std::int64_t observe_every, py::object observer, bool energy, double max_energy_error) {
             SolveOptions opt;
             opt.energy = energy;
+            opt.max_energy_error = max_energy_error;
             opt.save_every = save_every;
             opt.dofs = std::move(dofs);
             opt.max_displacement = max_displacement;
@@ -672,7 +673,8 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
           py::arg("max_displacement") = std::numeric_limits<double>::quiet_NaN(), py::arg("observe_every") = 4096,
-          py::arg("observer") = py::none(), py::arg("energy") = false);
+          py::arg("observer") = py::none(), py::arg("energy") = false,
+          py::arg("max_energy_error") = std::numeric_limits<double>::infinity());
 
   def_all_schemes<HybridModel>(m);
   def_all_schemes<EffectModel>(m);

@@ -288,6 +288,27 @@ class Diverges(Outcome):
 
 
 @dataclass(frozen=True)
+class EnergyDiverges(Outcome):
+    """DivergenceError from the energy check (status 'diverged' before t): the energy
+    balance error passed max_energy_error (0.5 by default with energy=True) while
+    the state stayed finite and inside the displacement bound."""
+    before: float
+
+    def check(self, m):
+        if m["status"] != "diverged":
+            return [f"status {m['status']}, expected diverged"]
+        bad = [] if m["fail_t"] < self.before else [f"diverged at t = {m['fail_t']}, expected before {self.before}"]
+        r = m["raised"]
+        if not (r and r["type"] == "DivergenceError" and r["t"] == m["fail_t"] and r["step"] == m["fail_step"]
+                and "energy balance error" in r["message"] and "max_energy_error" in r["message"]):
+            bad.append(f"throw=True raised {r}")
+        return bad
+
+    def __str__(self):
+        return f"DivergenceError from the energy check before t = {self.before:g} s"
+
+
+@dataclass(frozen=True)
 class NewtonFails(Outcome):
     """ConvergenceError (status 'newton_failed') with the residual history, before t."""
     before: float
@@ -375,20 +396,3 @@ class Accurate(Outcome):
 
     def __str__(self):
         return f"stable, {self.key.replace('_', ' ')} < {self.below:g}"
-
-
-@dataclass(frozen=True)
-class ThrownOff(Outcome):
-    """Vehicle: no DivergenceError (nothing overflows), yet the run is unstable: the
-    impact launches the vehicle and the energy balance error exceeds `balance`."""
-    balance: float
-
-    def check(self, m):
-        bad = _success(m)
-        if not m["energy_balance_error"] > self.balance:
-            bad.append(f"energy balance error {m['energy_balance_error']:.3g} <= {self.balance}")
-        return bad
-
-    def __str__(self):
-        return (f"unstable without DivergenceError: energy balance error > {self.balance:g} "
-                "(the vehicle is thrown off the rail)")

@@ -3,6 +3,8 @@ steps, its error falls as dt^2, and each term matches a closed form."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -252,3 +254,58 @@ def test_energy_needs_declared_effects():
         nvib.solve(m, nvib.CEMDTS(), dt=1e-3, t_end=0.01, energy=True)
     # without energy=True the same model runs and reports no energy
     assert nvib.solve(m, nvib.CEMDTS(), dt=1e-3, t_end=0.01).energy is None
+
+
+# ---- the energy check: an instability that stays finite is stopped as diverged
+
+def test_energy_check_stops_a_run_that_creates_energy():
+    """The vehicle at dt = 2e-3 s (omega_max dt = 2.04, past the explicit limit): the impact throws
+    the wheels off instead of overflowing. With energy=True the check stops it; without it the run
+    'succeeds' with a balance error close to 1."""
+    model = nvib.load_scene("vehicle")
+    with pytest.raises(nvib.DivergenceError, match=r"energy balance error .* beyond max_energy_error = 0\.5") as info:
+        nvib.solve(model, nvib.CentralDifference(), dt=2e-3, t_end=1.0, energy=True)
+    assert info.value.step == 10 and info.value.t == pytest.approx(0.02)
+    unchecked = nvib.solve(model, nvib.CentralDifference(), dt=2e-3, t_end=1.0, energy=True,
+                           max_energy_error=math.inf)
+    assert unchecked.success and unchecked.energy.relative_balance_error() > 0.9
+    # a stricter limit stops it no later
+    with pytest.raises(nvib.DivergenceError) as strict:
+        nvib.solve(model, nvib.CentralDifference(), dt=2e-3, t_end=1.0, energy=True, max_energy_error=0.1)
+    assert strict.value.step <= 10
+
+
+def test_energy_check_leaves_sound_runs_alone():
+    # forced from rest: the first steps' relative balance error is large (0.9 at step 1) but not checked
+    res = nvib.solve(nvib.load_scene("building"), nvib.CEMDTS(), dt=0.03, t_end=10.0, energy=True)
+    assert res.success and res.energy.relative_balance_error() < 0.05
+    res = nvib.solve(nvib.load_scene("vehicle"), nvib.CentralDifference(), dt=1e-3, t_end=1.0, energy=True)
+    assert res.success and res.energy.relative_balance_error() < 0.05
+
+
+def test_energy_check_arguments():
+    model = nvib.load_scene("hardening")
+    with pytest.raises(ValueError, match=r"^max_energy_error: needs the energy accounting"):
+        nvib.solve(model, nvib.CEMDTS(), dt=1e-3, t_end=0.1, max_energy_error=0.2)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match=r"^max_energy_error"):
+            nvib.solve(model, nvib.CEMDTS(), dt=1e-3, t_end=0.1, energy=True, max_energy_error=bad)
+    with pytest.raises(TypeError, match=r"^max_energy_error"):
+        nvib.solve(model, nvib.CEMDTS(), dt=1e-3, t_end=0.1, energy=True, max_energy_error="0.1")
+    with pytest.raises(TypeError, match=r"^energy"):
+        nvib.solve(model, nvib.CEMDTS(), dt=1e-3, t_end=0.1, energy=1)
+
+
+def test_cli_max_energy_error(capsys):
+    from nvib import cli
+
+    code = cli.main(["run", "vehicle", "--scheme", "cd", "--dt", "2e-3", "--energy"])
+    err = capsys.readouterr().err
+    assert code == 1 and "energy balance error" in err and "max_energy_error = 0.5" in err
+    code = cli.main(["run", "vehicle", "--scheme", "cd", "--dt", "2e-3", "--energy", "--max-energy-error", "inf"])
+    assert code == 0
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:  # bad input: argparse's exit 2 naming the argument
+        cli.main(["run", "vehicle", "--scheme", "cd", "--max-energy-error", "0.2"])
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and "argument --max-energy-error: needs the energy accounting" in err
