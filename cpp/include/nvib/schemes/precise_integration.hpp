@@ -7,10 +7,13 @@
 // Over a step, r(t_n + s) is replaced by its interpolating polynomial
 // sum_k c_k (s/h)^k and integrated exactly:
 //   x_{n+1} = T x_n + sum_k c_k k! h^{-k} int_0^h e^{H(h-s)} s^k ds,   T = e^{Hh}.
-// The moment integrals come from one exponential of the block matrix
+// The moment integrals come from the exponential of the block matrix
 // h [[H, I, 0, ..], [0, 0, I, ..], ..] (Van Loan 1978): its first block row is
 // [T, h phi_1, h^2 phi_2, ...], and int_0^h e^{H(h-s)} s^k ds = k! h^{k+1} phi_{k+1}.
-// No H^{-1} is needed, so a singular linear part (a free-floating vehicle) is fine.
+// The 2^N algorithm squares only that row (expm_increment_with_moments: the
+// rows below are known). No H^{-1} is needed, so a singular linear part (a
+// free-floating vehicle) is fine. Each pass is one matrix-vector product with
+// the propagator folded with the interpolation weights.
 //
 // order p: polynomial degree of the interpolation (p + 1 points).
 // Predictor: extrapolation through r_n, r_{n-1}, ..; corrector: interpolation
@@ -67,11 +70,9 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
       : Base(std::move(model), h), p_(scheme) {
     const Index n = this->size(), N = 2 * n, q = p_.order + 1;
     x_.setZero(N);
-    xn_.setZero(N);
+    z_.setZero(N + n * q);
     rnew_.setZero(n);
     R_.setZero(n, q);
-    Rc_.setZero(n, q);
-    Cc_.setZero(n, q);
     // Interpolation matrices, transposed so that Cc = R * Lt; zero-padded to q columns.
     for (Index m = 1; m <= q; ++m) {
       std::vector<double> pred, corr;
@@ -97,20 +98,20 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
 
   Status step() {
     const double t1 = this->next_time();
-    const Index q = p_.order + 1;
-    xn_ = x_;
+    const Index n = this->size(), N = 2 * n, q = p_.order + 1;
+    // z = [x_n; r_n; r_{n-1}; ..]: R_ is column-major, so its columns are the stacked history.
+    z_.head(N) = x_;
+    z_.tail(n * q) = Eigen::Map<const Vector>(R_.data(), n * q);
     // Predictor: extrapolate the history.
     const Index mp = std::min<Index>(q, nhist_);
-    Cc_.noalias() = R_ * Lpred_[static_cast<size_t>(mp - 1)];
-    propagate();
+    x_.noalias() = Ppred_[static_cast<size_t>(mp - 1)] * z_;
     for (int c = 0; c < p_.corrections; ++c) {
       evaluate(t1);
-      // Corrector: interpolate through r(x~_{n+1}) and the history.
+      // Corrector: interpolate through r(x~_{n+1}) and the history: z = [x_n; r~_{n+1}; r_n; ..].
       const Index mc = std::min<Index>(q, nhist_ + 1);
-      Rc_.col(0) = rnew_;
-      if (q > 1) Rc_.rightCols(q - 1) = R_.leftCols(q - 1);
-      Cc_.noalias() = Rc_ * Lcorr_[static_cast<size_t>(mc - 1)];
-      propagate();
+      z_.segment(N, n) = rnew_;
+      if (q > 1) z_.tail(n * (q - 1)) = Eigen::Map<const Vector>(R_.data(), n * (q - 1));
+      x_.noalias() = Pcorr_[static_cast<size_t>(mc - 1)] * z_;
     }
     evaluate(t1);
     // Shift the history (newest first).
@@ -145,8 +146,13 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   const Matrix& transition() const { return T_; }
 
  private:
+  // T = e^{hH} and the moment integrals W_k = k! h^{-k} int_0^h e^{H(h-s)} s^k ds
+  // (velocity columns: r has a zero top half), folded with the interpolation
+  // weights into one matrix per predictor and corrector variant:
+  //   x_{n+1} = T x_n + sum_k W_k c_k,  c = R L  =>  x_{n+1} = [T | W'_0 | W'_1 | ..] [x_n; r_0; r_1; ..]
+  // with W'_j = sum_k L(j, k) W_k: one matrix-vector product per pass.
   void build_propagators(double t0) {
-    const Index n = this->size(), N = 2 * n, q = p_.order + 1, B = q + 1;
+    const Index n = this->size(), N = 2 * n, q = p_.order + 1;
     Matrix K0(n, n), C0(n, n);
     Vector zero = Vector::Zero(n);
     model_.tangent(zero, zero, t0, K0, C0, stats_);
@@ -162,28 +168,32 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     H.bottomLeftCorner(n, n) = -MK;
     H.bottomRightCorner(n, n) = -MC;
     Hlo_ = H.bottomRows(n);
-    // Block matrix h [[H, I, 0, ..], [0, 0, I, ..], .., [0 .. 0]] with B = q + 1 blocks.
-    Matrix Z = Matrix::Zero(B * N, B * N);
-    Z.topLeftCorner(N, N) = h_ * H;
-    for (Index k = 0; k + 1 < B; ++k) Z.block(k * N, (k + 1) * N, N, N) = h_ * Matrix::Identity(N, N);
-    Matrix E = expm_increment(Z, p_.squarings);
-    ++stats_.num_expm;
-    T_ = E.topLeftCorner(N, N);
+    // First block row of the exponential of h [[H, I, 0, ..], [0, 0, I, ..], ..] (Van Loan 1978).
+    std::vector<Matrix> F;
+    T_ = expm_increment_with_moments(h_ * H, h_, static_cast<int>(q), F, p_.squarings);
     T_.diagonal().array() += 1.0;
-    W_.clear();
+    ++stats_.num_expm;
+    std::vector<Matrix> W;
     double fact = 1.0;
     for (Index k = 0; k < q; ++k) {
       if (k > 0) fact *= static_cast<double>(k);
-      // k! h^{-k} * (first block row, block k+1), only the velocity columns (r has a zero top half).
-      W_.push_back(fact / std::pow(h_, static_cast<double>(k)) * E.block(0, (k + 1) * N + n, N, n));
+      W.push_back(fact / std::pow(h_, static_cast<double>(k)) * F[static_cast<size_t>(k)].rightCols(n));
+    }
+    auto fold = [&](const Matrix& L) {
+      Matrix P = Matrix::Zero(N, N + n * q);
+      P.leftCols(N) = T_;
+      for (Index j = 0; j < q; ++j)
+        for (Index k = 0; k < q; ++k)
+          if (L(j, k) != 0.0) P.block(0, N + j * n, N, n) += L(j, k) * W[static_cast<size_t>(k)];
+      return P;
+    };
+    Ppred_.clear();
+    Pcorr_.clear();
+    for (Index m = 0; m < q; ++m) {
+      Ppred_.push_back(fold(Lpred_[static_cast<size_t>(m)]));
+      Pcorr_.push_back(fold(Lcorr_[static_cast<size_t>(m)]));
     }
     ready_ = true;
-  }
-
-  // x = T xn + sum_k W_k Cc(:, k)
-  void propagate() {
-    x_.noalias() = T_ * xn_;
-    for (size_t k = 0; k < W_.size(); ++k) x_.noalias() += W_[k] * Cc_.col(static_cast<Index>(k));
   }
 
   // Evaluates the force at x_ (time t1): sets u_, v_, a_ and the remainder rnew_.
@@ -205,9 +215,10 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   PreciseIntegration p_;
   bool ready_ = false;
   Matrix T_, Hlo_;
-  std::vector<Matrix> W_, Lpred_, Lcorr_;
-  Vector x_, xn_, rnew_;
-  Matrix R_, Rc_, Cc_;
+  std::vector<Matrix> Lpred_, Lcorr_;  // interpolation weights per number of known points
+  std::vector<Matrix> Ppred_, Pcorr_;  // the propagators folded with them (see build_propagators)
+  Vector x_, z_, rnew_;
+  Matrix R_;
   Index nhist_ = 0;
 };
 

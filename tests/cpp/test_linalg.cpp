@@ -1,7 +1,11 @@
+// Linear algebra of the schemes.
 // DenseLU (the implicit schemes' factorisation) against Eigen's PartialPivLU:
 // solutions of random systems on both sides of the unblocked/blocked switch,
 // pivoting on a zero diagonal, and singular or non-finite matrices refused.
+// expm_increment_with_moments (PIM's propagators) against the 2^N exponential
+// of the whole block matrix it avoids forming.
 #include <nvib/linalg/dense_lu.hpp>
+#include <nvib/linalg/expm.hpp>
 
 #include <random>
 
@@ -67,5 +71,31 @@ int main() {
       CHECK(!big.compute(S));
     }
   }
-  return nvib_test::finish("test_dense_lu");
+  // PIM's moments: the structured first block row equals the full block exponential
+  for (int q : {1, 2, 3, 4}) {
+    const Index n = 3, N = 2 * n;
+    Matrix H = Matrix::Zero(N, N);  // a damped chain's state matrix
+    H.topRightCorner(n, n).setIdentity();
+    Matrix K(n, n);
+    K << 2, -1, 0, -1, 2, -1, 0, -1, 1;
+    H.bottomLeftCorner(n, n) = -400.0 * K;
+    H.bottomRightCorner(n, n) = -0.3 * K;
+    for (double h : {1e-3, 0.02, 0.1}) {
+      const Index B = q + 1;
+      Matrix Z = Matrix::Zero(B * N, B * N);
+      Z.topLeftCorner(N, N) = h * H;
+      for (Index k = 0; k + 1 < B; ++k) Z.block(k * N, (k + 1) * N, N, N) = h * Matrix::Identity(N, N);
+      const Matrix E = nvib::expm_increment(Z, 20);
+      std::vector<Matrix> F;
+      const Matrix Ta = nvib::expm_increment_with_moments(h * H, h, q, F, 20);
+      CHECK(static_cast<int>(F.size()) == q);
+      CHECK((Ta - E.topLeftCorner(N, N)).cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, Ta.cwiseAbs().maxCoeff()));
+      for (int j = 1; j <= q; ++j) {
+        const Matrix Ej = E.block(0, j * N, N, N);
+        const double scale = Ej.cwiseAbs().maxCoeff();
+        CHECK((F[static_cast<size_t>(j) - 1] - Ej).cwiseAbs().maxCoeff() <= 1e-12 * scale);
+      }
+    }
+  }
+  return nvib_test::finish("test_linalg");
 }
