@@ -4,6 +4,7 @@
     nvib run SCENE [options]         integrate a scene, print a summary, optionally --out / --plot
     nvib demo                        hardening oscillator with every scheme against its closed form
     nvib stability [options]         spectral radius and stability limit of schemes on a linear SDOF
+    nvib paper OUTDIR                the figures and tables of Yang et al. (2017), and CEMDTS's eta study
 
 Exit status: 0 success, 1 the run failed (diverged, Newton failed) or an
 output could not be written, 2 bad input (the message names the argument).
@@ -669,6 +670,44 @@ def _stability_checked(args) -> int:
     return 0
 
 
+# ---------------------------------------------------------------- nvib paper
+
+def _paper(args, parser) -> int:
+    try:
+        return _paper_checked(args)
+    except _Usage as exc:
+        parser.error(f"argument {exc.argument}: {exc.message}" if exc.argument else exc.message)
+    return 2  # not reached: parser.error exits
+
+
+def _paper_checked(args) -> int:
+    from . import paper
+
+    out = os.path.abspath(args.outdir)
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise _Usage("OUTDIR", f"{args.outdir!r} exists and is not a folder")
+    show = args.progress if args.progress is not None else _isatty(sys.stderr)
+    t0 = time.perf_counter()
+
+    def progress(what):
+        if show:
+            print(f"  {what} ({time.perf_counter() - t0:.1f} s)", file=sys.stderr, flush=True)
+
+    try:
+        files = paper.write_paper(out, repeats=args.repeats, cpu_repeats=args.cpu_repeats, progress=progress)
+    except KeyboardInterrupt:
+        print("nvib paper: interrupted", file=sys.stderr)
+        return 130
+    except OSError as exc:
+        print(f"nvib paper: error: OUTDIR: cannot write into {args.outdir!r}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 1
+    for path in files.values():
+        print(f"wrote {path}")
+    print(f"{len(files)} files in {time.perf_counter() - t0:.1f} s; read {files['summary.md']}")
+    return 0
+
+
 # ---------------------------------------------------------------- parser
 
 _RUN_EPILOG = """\
@@ -777,6 +816,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress on stderr (default: when stderr is a terminal)")
     p.set_defaults(func=_cost, subparser=p, without=None)
+
+    p = sub.add_parser("paper", help="regenerate the figures and tables of Yang et al. (2017) into a folder",
+                       description="Run the cases of Yang et al. (2017) with its schemes (Newmark and GaM both in "
+                                   "the paper's incremental format and with Newton iteration, LCDM with synchronized "
+                                   "and half-step velocity) against closed forms or DOP853 references, and write "
+                                   "Figs. 2-4, 6, 7, 9-11, Table 1, the CPU-time table, CEMDTS's eta study "
+                                   "(PNG and CSV) and summary.md into OUTDIR.")
+    p.add_argument("outdir", metavar="OUTDIR", help="folder for the figures and tables (created if missing)")
+    p.add_argument("--repeats", type=_positive_int, default=3,
+                   help="timed runs per figure run, the best is kept (default 3)")
+    p.add_argument("--cpu-repeats", type=_positive_int, default=5,
+                   help="timed runs per scheme in the CPU-time table (default 5)")
+    p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="report each finished part on stderr (default: when stderr is a terminal)")
+    p.set_defaults(func=_paper, subparser=p)
 
     p = sub.add_parser("demo", help="hardening oscillator with every scheme against its closed form")
     p.add_argument("--dt", type=float, default=1e-3, help="time step [s] (default 1e-3, the paper's)")
