@@ -248,7 +248,7 @@ def cpu_time_table(exes: dict | None, rounds: int, repeats: int) -> list[str]:
                      + (("yes" if paper / t >= 100 else "no") if paper else "-") + " | "
                      + (f"{t / loop_best:.1f}x" if exes else "-") + f" | {s.num_force_evals:,} | "
                      f"{s.num_newton_iters:,} | {s.num_factorizations:,} | {errors[label]:.1e} |")
-    lines += ["", f"Hand-written loop (cpp/building_loop.cpp, CEMDTS(0.45), same dt, every state saved): "
+    lines += ["", "Hand-written loop (cpp/building_loop.cpp, CEMDTS(0.45), same dt, every state saved): "
                   + (f"{loop_best * 1e3:.3g} ms." if exes else "not run (no C++ compiler).")]
     return lines
 

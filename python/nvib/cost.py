@@ -62,7 +62,7 @@ from . import _checks, _core
 from ._labels import scheme_label
 from ._model import Model
 from ._solve import SCHEMES, solve
-from .reference import SCALE_FLOOR, FirstOrder, Reference, reference as _reference
+from .reference import FirstOrder, Reference, scale_from_peaks, reference as _reference
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 SCIPY_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
@@ -237,13 +237,7 @@ def _conservative(model: Model) -> bool:
 def _scales_from_reference(model: Model, ref: Reference, t_end: float) -> np.ndarray:
     grid = np.linspace(0.0, t_end, 4001)
     u, v = ref(grid)
-    peak = np.concatenate((np.max(np.abs(u), axis=0), np.max(np.abs(v), axis=0)))
-    n = model.n
-    scale = np.empty_like(peak)
-    for part in (slice(0, n), slice(n, 2 * n)):
-        top = float(np.max(peak[part]))
-        scale[part] = np.maximum(peak[part], SCALE_FLOOR * top) if top > 0 else 1.0
-    return scale
+    return scale_from_peaks(np.concatenate((np.max(np.abs(u), axis=0), np.max(np.abs(v), axis=0))), model.n)
 
 
 def cost_scipy(model: Model, methods=SCIPY_METHODS, rtols=SCIPY_RTOLS, *, t_end: float | None = None, dofs=None,

@@ -173,8 +173,12 @@ def tolerance_scale(model: Model, t0: float, t_end: float, u0: np.ndarray, v0: n
     sol = solve_ivp(sys.rhs, (t0, t_end), y0, method="DOP853", rtol=1e-6, atol=1e-9 * base)
     if not sol.success or not np.all(np.isfinite(sol.y)):
         raise ValueError(f"model: the pilot solve for the tolerance scales failed ({sol.message})")
-    peak = np.max(np.abs(sol.y), axis=1)
-    n = model.n
+    return scale_from_peaks(np.max(np.abs(sol.y), axis=1), model.n)
+
+
+def scale_from_peaks(peak: np.ndarray, n: int) -> np.ndarray:
+    """Per-component scale of [u; v] from their peaks, each floored at SCALE_FLOOR x the
+    largest peak of its kind (displacements, velocities); 1 where a kind never moves."""
     scale = np.empty_like(peak)
     for part in (slice(0, n), slice(n, 2 * n)):
         top = float(np.max(peak[part]))

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import nvib
-from nvib import cli
+
+from _cli import run_cli
 from nvib._progress import ProgressBar, format_duration
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -25,15 +26,6 @@ SCHEMES = {
 }
 
 
-def run_cli(capsys, *argv):
-    """(exit status, stdout, stderr) of ``nvib argv`` run in this process."""
-    try:
-        code = cli.main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse: --help, --version, usage errors
-        code = exc.code
-    out, err = capsys.readouterr()
-    assert "Traceback" not in out + err
-    return code, out, err
 
 
 def summary(out: str) -> dict:

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 import nvib
-from nvib import cli, exact
+
+from _cli import run_cli
+from nvib import exact
 from nvib.cost import FIELDS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -174,14 +176,6 @@ def test_cost_bad_input_names_the_argument(hardening):
         nvib.cost(hardening, [nvib.CEMDTS()], [1e-3], reference="exact")
 
 
-def run_cli(capsys, *argv):
-    try:
-        code = cli.main([str(a) for a in argv])
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    assert "Traceback" not in out + err
-    return code, out, err
 
 
 def test_cli_cost_writes_the_diagram_and_the_table(capsys, tmp_path):

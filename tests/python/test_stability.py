@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import nvib
-from nvib import cli
+
+from _cli import run_cli
 from nvib import stability as stab
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -188,14 +189,6 @@ def test_bad_input_names_the_argument(call, exc, name):
 
 # ---------------------------------------------------------------- nvib stability
 
-def run_cli(capsys, *argv):
-    try:
-        code = cli.main([str(a) for a in argv])
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    assert "Traceback" not in out + err
-    return code, out, err
 
 
 def table_rows(out: str) -> dict:
