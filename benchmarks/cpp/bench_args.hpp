@@ -1,4 +1,4 @@
-// Command line shared by the benchmark programs (no nvib in here: the
+// Command line and output helpers shared by the benchmark programs (no nvib in here: the
 // hand-written loops must not depend on the library they are compared with).
 //   PROGRAM DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...] [--dump=PREFIX]
 #pragma once
@@ -36,4 +36,20 @@ inline bool parse_bench_args(int argc, char** argv, BenchArgs& a) {
   a.eta = std::atof(argv[4]);
   for (int i = 5; i < argc; ++i) a.save_every.push_back(std::atoll(argv[i]));
   return true;
+}
+
+// Writes count doubles to path (raw, native byte order); false, with a message, when it cannot.
+inline bool write_doubles(const std::string& path, const double* x, size_t count) {
+  std::FILE* fh = std::fopen(path.c_str(), "wb");
+  const bool ok = fh && std::fwrite(x, sizeof(double), count, fh) == count;
+  if (fh) std::fclose(fh);
+  if (!ok) std::fprintf(stderr, "cannot write %s\n", path.c_str());
+  return ok;
+}
+
+// Prints "name": [x0, x1, ...] with every digit (a JSON member).
+inline void print_json_vector(const char* name, const double* x, int n) {
+  std::printf("\"%s\": [", name);
+  for (int i = 0; i < n; ++i) std::printf("%s%.17g", i ? ", " : "", x[i]);
+  std::printf("]");
 }

@@ -143,12 +143,6 @@ State run_cemdts(double h, double eta, std::int64_t nsteps, std::int64_t k, Outp
   return s;
 }
 
-void print_vec(const char* name, const double* x) {
-  std::printf("\"%s\": [", name);
-  for (int i = 0; i < N; ++i) std::printf("%s%.17g", i ? ", " : "", x[i]);
-  std::printf("]");
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -184,13 +178,7 @@ int main(int argc, char** argv) {
       rows = kept.rows;
       if (!dump.empty()) {
         const std::string path = dump + (scheme == 0 ? ".cd." : ".cemdts.") + std::to_string(k) + ".bin";
-        std::FILE* fh = std::fopen(path.c_str(), "wb");
-        const size_t count = static_cast<size_t>(kept.rows * N);
-        if (!fh || std::fwrite(kept.u.get(), sizeof(double), count, fh) != count) {
-          std::fprintf(stderr, "cannot write %s\n", path.c_str());
-          return 1;
-        }
-        std::fclose(fh);
+        if (!write_doubles(path, kept.u.get(), static_cast<size_t>(kept.rows * N))) return 1;
       }
       for (int r = 0; r < repeats; ++r) {
         const auto t0 = clock::now();
@@ -212,11 +200,11 @@ int main(int argc, char** argv) {
                   scheme == 0 ? "cd" : "cemdts", static_cast<long long>(k), static_cast<long long>(nsteps),
                   static_cast<long long>(rows), repeats, times.front(), times[times.size() / 2], fresh.front(),
                   checksum);
-      print_vec("u", last.u);
+      print_json_vector("u", last.u, N);
       std::printf(", ");
-      print_vec("v", last.v);
+      print_json_vector("v", last.v, N);
       std::printf(", ");
-      print_vec("a", last.a);
+      print_json_vector("a", last.a, N);
       std::printf("}\n");
       std::fflush(stdout);
     }

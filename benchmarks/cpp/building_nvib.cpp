@@ -60,11 +60,9 @@ nvib::Model<HandForce> building_functor() {
   return nvib::make_model(nvib::Mass::diagonal(nvib::Vector::Constant(6, 1e5)), HandForce{});
 }
 
-void print_vec(const char* name, const nvib::History& x) {
-  std::printf("\"%s\": [", name);
-  const auto last = x.rows() - 1;
-  for (Eigen::Index i = 0; i < x.cols(); ++i) std::printf("%s%.17g", i ? ", " : "", x(last, i));
-  std::printf("]");
+// The last saved row (rows of a History are contiguous).
+void print_last_row(const char* name, const nvib::History& x) {
+  print_json_vector(name, x.data() + (x.rows() - 1) * x.cols(), static_cast<int>(x.cols()));
 }
 
 template <class Scheme, class ModelT>
@@ -89,11 +87,11 @@ void bench(const char* label, const Scheme& scheme, const ModelT& model, double 
               "\"best\": %.9g, \"median\": %.9g, \"best_wall_time\": %.9g, ",
               label, static_cast<long long>(k), static_cast<long long>(res.stats.num_steps),
               static_cast<long long>(res.t.size()), repeats, times.front(), times[times.size() / 2], inner.front());
-  print_vec("u", res.u);
+  print_last_row("u", res.u);
   std::printf(", ");
-  print_vec("v", res.v);
+  print_last_row("v", res.v);
   std::printf(", ");
-  print_vec("a", res.a);
+  print_last_row("a", res.a);
   std::printf("}\n");
   std::fflush(stdout);
 }

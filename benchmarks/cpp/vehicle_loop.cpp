@@ -167,12 +167,6 @@ State run_cemdts(const double* u0, const double* v0, double h, double eta, std::
   return s;
 }
 
-void print_vec(const char* name, const double* x) {
-  std::printf("\"%s\": [", name);
-  for (int i = 0; i < N; ++i) std::printf("%s%.17g", i ? ", " : "", x[i]);
-  std::printf("]");
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -209,24 +203,18 @@ int main(int argc, char** argv) {
     const char* name = scheme == 0 ? "cd" : "cemdts";
     if (!dump.empty()) {
       const std::string path = dump + "." + name + ".bin";
-      std::FILE* fh = std::fopen(path.c_str(), "wb");
-      if (!fh || std::fwrite(out.u.get(), sizeof(double), static_cast<size_t>(out.rows * N), fh) !=
-                     static_cast<size_t>(out.rows * N)) {
-        std::fprintf(stderr, "cannot write %s\n", path.c_str());
-        return 1;
-      }
-      std::fclose(fh);
+      if (!write_doubles(path, out.u.get(), static_cast<size_t>(out.rows * N))) return 1;
     }
     std::sort(times.begin(), times.end());
     std::printf("{\"scheme\": \"%s\", \"save_every\": %lld, \"steps\": %lld, \"saved\": %lld, \"repeats\": %d, "
                 "\"best\": %.9g, \"median\": %.9g, ",
                 name, static_cast<long long>(k), static_cast<long long>(nsteps), static_cast<long long>(out.rows),
                 repeats, times.front(), times[times.size() / 2]);
-    print_vec("u", last.u);
+    print_json_vector("u", last.u, N);
     std::printf(", ");
-    print_vec("v", last.v);
+    print_json_vector("v", last.v, N);
     std::printf(", ");
-    print_vec("a", last.a);
+    print_json_vector("a", last.a, N);
     std::printf("}\n");
     std::fflush(stdout);
   }
