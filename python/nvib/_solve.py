@@ -174,30 +174,31 @@ class Stepper:
         if t_end <= self.t:
             raise ValueError(f"t_end: must be > the current time {self.t}, got {t_end}")
         save_every = _checks.integer("save_every", save_every, minimum=1)
-        if max_displacement is None:
-            bound = default_max_displacement(self.u, self.v, t_end - self.t)
-        elif isinstance(max_displacement, (int, float)) and max_displacement == math.inf:
-            bound = math.inf
-        else:
-            bound = _checks.real("max_displacement", max_displacement, positive=True)
+        bound = _limit("max_displacement", max_displacement,
+                       default=default_max_displacement(self.u, self.v, t_end - self.t))
         if progress is not None and not callable(progress):
             raise TypeError("progress: expected a callable progress(step, n_steps)")
         if not isinstance(energy, bool):
             raise TypeError(f"energy: expected True or False, got {type(energy).__name__}")
-        if max_energy_error is None:
-            energy_limit = DEFAULT_MAX_ENERGY_ERROR if energy else math.inf
-        elif isinstance(max_energy_error, (int, float)) and max_energy_error == math.inf:
-            energy_limit = math.inf
-        else:
-            energy_limit = _checks.real("max_energy_error", max_energy_error, positive=True)
-            if not energy:
-                raise ValueError("max_energy_error: needs the energy accounting (energy=True)")
+        energy_limit = _limit("max_energy_error", max_energy_error,
+                              default=DEFAULT_MAX_ENERGY_ERROR if energy else math.inf)
+        if max_energy_error is not None and energy_limit < math.inf and not energy:
+            raise ValueError("max_energy_error: needs the energy accounting (energy=True)")
         raw = self._st.integrate(t_end, save_every, _dof_indices(self.model, dofs), bound, 4096, progress,
                                  energy, energy_limit)
         res = Result(raw, self.model, self.scheme, self.dt)
         if throw and res.status != "success":
             raise error_for(res.status, res.failure, res)
         return res
+
+
+def _limit(name: str, value, *, default: float) -> float:
+    """A run limit: None for the default, math.inf for none, else a positive real (named when not)."""
+    if value is None:
+        return default
+    if isinstance(value, (int, float)) and value == math.inf:
+        return math.inf
+    return _checks.real(name, value, positive=True)
 
 
 # With energy=True, a run whose energy balance error exceeds half the energy scale stops as diverged.
