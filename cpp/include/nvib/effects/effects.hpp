@@ -413,22 +413,8 @@ class EffectSet {
     return *this;
   }
   // Moving the vectors keeps their buffers, so the compiled pointers stay valid.
-  EffectSet(EffectSet&& o) noexcept { *this = std::move(o); }
-  EffectSet& operator=(EffectSet&& o) noexcept {
-    all_ = std::move(o.all_);
-    active_ = std::move(o.active_);
-    f_const_ = std::move(o.f_const_);
-    uses_time_ = o.uses_time_;
-    linear_ = o.linear_;
-    active_velocity_ = o.active_velocity_;
-    n_ = o.n_;
-    idx_ = std::move(o.idx_);
-    coef_ = std::move(o.coef_);
-    dense_ = std::move(o.dense_);
-    terms_ = std::move(o.terms_);
-    groups_ = std::move(o.groups_);
-    return *this;
-  }
+  EffectSet(EffectSet&&) noexcept = default;
+  EffectSet& operator=(EffectSet&&) noexcept = default;
 
   const std::vector<Effect>& effects() const { return all_; }
   const std::vector<Effect>& evaluated() const { return active_; }
