@@ -1,5 +1,6 @@
 // The one loop shared by every scheme: step, save every k-th state, detect
-// divergence, sum the counters, call an observer (progress, interrupts).
+// divergence, sum the counters, call an observer (progress, interrupts). It
+// knows no scheme: a scheme names its stepper (Scheme::stepper<Model>).
 #pragma once
 
 #include <chrono>
@@ -9,12 +10,6 @@
 #include <utility>
 
 #include "core/stepper.hpp"
-#include "schemes/cemdts.hpp"
-#include "schemes/central_difference.hpp"
-#include "schemes/generalized_alpha.hpp"
-#include "schemes/newmark.hpp"
-#include "schemes/precise_integration.hpp"
-#include "schemes/zhai.hpp"
 
 namespace nvib {
 
@@ -36,8 +31,9 @@ struct SolveOptions {
   // energy scale (the largest |kinetic| + |potential| + |work in| + |dissipated|
   // so far) stops as diverged. Catches an instability that stays finite (a
   // vehicle launched off its rails) which no displacement bound sees.
-  // Checked every step from the 10th on; infinity means no check.
-  double max_energy_error = std::numeric_limits<double>::infinity();
+  // Checked every step from the 10th on; infinity means no check; NaN (the
+  // default) means kDefaultMaxEnergyError with energy, no check without.
+  double max_energy_error = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Columns of Result::energy.
@@ -59,6 +55,10 @@ struct Result {
   double max_residual = std::numeric_limits<double>::quiet_NaN();
 };
 
+// The energy check's default limit: half the energy scale. A sound run's
+// balance error is orders of magnitude below it; an unstable one reaches it.
+constexpr double kDefaultMaxEnergyError = 0.5;
+
 // First step at which SolveOptions::max_energy_error is checked.
 constexpr std::int64_t kEnergyCheckFrom = 10;
 
@@ -79,11 +79,11 @@ inline double default_max_displacement(const Vector& u, const Vector& v, double 
 // Number of steps to reach t_end: t_end/dt rounded when it is an integer up
 // to round-off, else rounded up (the run then ends at the first multiple of dt past t_end).
 inline std::int64_t steps_to_reach(double t0, double t_end, double dt) {
-  detail::require(std::isfinite(t_end), "t_end: must be finite");
-  detail::require(std::isfinite(dt) && dt > 0.0, "dt: the time step must be finite and > 0, got " + detail::fmt(dt));
-  detail::require(t_end > t0, "t_end: must be > t0 (" + detail::fmt(t0) + "), got " + detail::fmt(t_end));
+  NVIB_CHECK(std::isfinite(t_end), "t_end", "must be finite");
+  NVIB_CHECK(std::isfinite(dt) && dt > 0.0, "dt", "the time step must be finite and > 0, got " + detail::fmt(dt));
+  NVIB_CHECK(t_end > t0, "t_end", "must be > t0 (" + detail::fmt(t0) + "), got " + detail::fmt(t_end));
   const double r = (t_end - t0) / dt;
-  detail::require(r < 9.0e15, "dt: too many steps (t_end - t0)/dt = " + detail::fmt(r));
+  NVIB_CHECK(r < 9.0e15, "dt", "too many steps (t_end - t0)/dt = " + detail::fmt(r));
   const double nearest = std::round(r);
   if (std::abs(r - nearest) <= 1e-9 * std::max(1.0, r)) return std::max<std::int64_t>(1, static_cast<std::int64_t>(nearest));
   return static_cast<std::int64_t>(std::ceil(r));
@@ -169,6 +169,22 @@ Failure energy_failure(const Stepper& st, std::int64_t step, double balance, dou
   return f;
 }
 
+// One step with the loop's divergence test (every entry of u, v and a
+// finite), for stepping by hand: the failure, if any, in `failure`.
+template <class Stepper>
+Status checked_step(Stepper& st, Failure& failure) {
+  const Status s = st.step();
+  if (s != Status::success) {
+    failure = st.failure();
+    return s;
+  }
+  if (!displacement_ok(st.u(), std::numeric_limits<double>::infinity()) || !rates_ok(st.v(), st.a())) {
+    failure = divergence(st, st.step_index(), std::numeric_limits<double>::infinity());
+    return Status::diverged;
+  }
+  return s;
+}
+
 struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
@@ -178,18 +194,18 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   const Index n = st.size();
-  detail::require(opt.save_every >= 1, "save_every: must be >= 1, got " + std::to_string(opt.save_every));
-  detail::require(opt.observe_every >= 1, "observe_every: must be >= 1");
-  detail::require(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0,
-                  "max_displacement: must be > 0 (infinity for no bound, NaN for the default)");
+  NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
+  NVIB_CHECK(opt.observe_every >= 1, "observe_every", "must be >= 1");
+  NVIB_CHECK(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0, "max_displacement",
+                  "must be > 0 (infinity for no bound, NaN for the default)");
   for (Index d : opt.dofs)
-    detail::require(d >= 0 && d < n, "dofs: index " + std::to_string(d) + " is out of range for " +
+    NVIB_CHECK(d >= 0 && d < n, "dofs", "index " + std::to_string(d) + " is out of range for " +
                                          std::to_string(n) + " degrees of freedom");
   const std::int64_t nsteps = steps_to_reach(st.time(), t_end, st.dt());
   const std::int64_t k = opt.save_every;
   const std::int64_t nsave = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
-  detail::require(nsave <= 2'000'000'000 / std::max<Index>(1, n),
-                  "save_every: the run would save " + std::to_string(nsave) + " states; raise save_every");
+  NVIB_CHECK(nsave <= 2'000'000'000 / std::max<Index>(1, n), "save_every",
+                  "the run would save " + std::to_string(nsave) + " states; raise save_every");
 
   Result res;
   res.num_steps_requested = nsteps;
@@ -204,12 +220,15 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   res.u.resize(nsave, m);
   res.v.resize(nsave, m);
   res.a.resize(nsave, m);
-  detail::require(opt.max_energy_error > 0.0, "max_energy_error: must be > 0 (infinity for no check)");
-  const bool energy_check = opt.max_energy_error < std::numeric_limits<double>::infinity();
-  detail::require(!energy_check || opt.energy, "max_energy_error: needs the energy accounting (energy = true)");
+  const double energy_limit = std::isnan(opt.max_energy_error)
+                                 ? (opt.energy ? kDefaultMaxEnergyError : std::numeric_limits<double>::infinity())
+                                 : opt.max_energy_error;
+  NVIB_CHECK(energy_limit > 0.0, "max_energy_error", "must be > 0 (infinity for no check)");
+  const bool energy_check = energy_limit < std::numeric_limits<double>::infinity();
+  NVIB_CHECK(!energy_check || opt.energy, "max_energy_error", "needs the energy accounting (energy = true)");
   if (opt.energy) {
-    detail::require(st.model().accounts_energy(),
-                    "energy: the model has a force whose energy is unknown (a user callable); "
+    NVIB_CHECK(st.model().accounts_energy(), "energy",
+                    "the model has a force whose energy is unknown (a user callable); "
                     "energy accounting needs built-in effects");
     res.energy.resize(nsave, 5);
   }
@@ -308,8 +327,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         have_energy = true;
         escale = std::max(escale, std::abs(ek) + std::abs(ep) + std::abs(work) + std::abs(diss));
         const double balance = ek + ep + diss - work - e0;
-        if (std::abs(balance) > opt.max_energy_error * escale) {
-          res.failure = energy_failure(st, i, balance, escale, opt.max_energy_error);
+        if (std::abs(balance) > energy_limit * escale) {
+          res.failure = energy_failure(st, i, balance, escale, energy_limit);
           res.status = Status::diverged;
           break;
         }
@@ -341,8 +360,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
 }
 
 template <class Scheme, class ModelT>
-typename stepper_for<Scheme, ModelT>::type make_stepper(const Scheme& scheme, ModelT model, double dt) {
-  return typename stepper_for<Scheme, ModelT>::type(scheme, std::move(model), dt);
+typename Scheme::template stepper<ModelT> make_stepper(const Scheme& scheme, ModelT model, double dt) {
+  return typename Scheme::template stepper<ModelT>(scheme, std::move(model), dt);
 }
 
 // Integrates from (t0, u0, v0) to t_end. Counters include the start-up

@@ -10,12 +10,12 @@ class Mass {
   Mass() = default;
 
   static Mass diagonal(const Vector& m) {
-    detail::require(m.size() > 0, "mass: at least one degree of freedom is needed");
+    NVIB_CHECK(m.size() > 0, "mass", "at least one degree of freedom is needed");
     for (Index i = 0; i < m.size(); ++i) {
-      detail::require(std::isfinite(m[i]), "mass: entry " + std::to_string(i) + " is not finite");
-      detail::require(m[i] > 0.0, "mass: entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
+      NVIB_CHECK(std::isfinite(m[i]), "mass", "entry " + std::to_string(i) + " is not finite");
+      NVIB_CHECK(m[i] > 0.0, "mass", "entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
                                       ", every mass must be > 0");
-      detail::require(std::isfinite(1.0 / m[i]), "mass: entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
+      NVIB_CHECK(std::isfinite(1.0 / m[i]), "mass", "entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
                                                      ", too small for its inverse to be finite");
     }
     Mass out;
@@ -28,19 +28,19 @@ class Mass {
   }
 
   static Mass dense(const Matrix& M) {
-    detail::require(M.rows() > 0 && M.rows() == M.cols(),
-                    "mass: a dense mass must be square, got " + std::to_string(M.rows()) + "x" +
+    NVIB_CHECK(M.rows() > 0 && M.rows() == M.cols(), "mass",
+                    "a dense mass must be square, got " + std::to_string(M.rows()) + "x" +
                         std::to_string(M.cols()));
-    detail::require(M.allFinite(), "mass: the matrix has non-finite entries");
+    NVIB_CHECK(M.allFinite(), "mass", "the matrix has non-finite entries");
     const double scale = M.cwiseAbs().maxCoeff();
-    detail::require((M - M.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * scale,
-                    "mass: the dense mass matrix is not symmetric");
+    NVIB_CHECK((M - M.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * scale, "mass",
+                    "the dense mass matrix is not symmetric");
     Mass out;
     out.diag_ = false;
     out.M_ = M;
     out.llt_.compute(M);
-    detail::require(out.llt_.info() == Eigen::Success,
-                    "mass: the dense mass matrix is not positive definite");
+    NVIB_CHECK(out.llt_.info() == Eigen::Success, "mass",
+                    "the dense mass matrix is not positive definite");
     out.d_ = M.diagonal();
     return out;
   }

@@ -73,6 +73,13 @@ struct has_energy<F, std::void_t<decltype(std::declval<const F&>().potential(std
                                                                                std::declval<const CVecRef&>(), 0.0)),
                                  decltype(std::declval<const F&>().dissipated_power(std::declval<const CVecRef&>()))>>
     : std::true_type {};
+// magnitude(u, v, t, out): out_i = the sum of |contributions| to the force on DOF i.
+template <class F, class = void>
+struct has_magnitude : std::false_type {};
+template <class F>
+struct has_magnitude<F, std::void_t<decltype(std::declval<F&>().magnitude(
+                            std::declval<const CVecRef&>(), std::declval<const CVecRef&>(), 0.0,
+                            std::declval<VecRef>()))>> : std::true_type {};
 }  // namespace traits
 
 template <class Force = NoForce>
@@ -86,20 +93,20 @@ class Model {
   Model(Mass mass, Matrix K, Matrix C, Force force = Force{})
       : mass_(std::move(mass)), K_(std::move(K)), C_(std::move(C)), f_(std::move(force)) {
     const Index n = mass_.size();
-    detail::require(n > 0, "mass: the model has no degree of freedom");
+    NVIB_CHECK(n > 0, "mass", "the model has no degree of freedom");
     has_K_ = K_.size() > 0;
     has_C_ = C_.size() > 0;
     if (has_K_) {
-      detail::require(K_.rows() == n && K_.cols() == n,
-                      "K: expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
+      NVIB_CHECK(K_.rows() == n && K_.cols() == n, "K",
+                      "expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
                           "), got (" + std::to_string(K_.rows()) + ", " + std::to_string(K_.cols()) + ")");
-      detail::require(K_.allFinite(), "K: the matrix has non-finite entries");
+      NVIB_CHECK(K_.allFinite(), "K", "the matrix has non-finite entries");
     }
     if (has_C_) {
-      detail::require(C_.rows() == n && C_.cols() == n,
-                      "C: expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
+      NVIB_CHECK(C_.rows() == n && C_.cols() == n, "C",
+                      "expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
                           "), got (" + std::to_string(C_.rows()) + ", " + std::to_string(C_.cols()) + ")");
-      detail::require(C_.allFinite(), "C: the matrix has non-finite entries");
+      NVIB_CHECK(C_.allFinite(), "C", "the matrix has non-finite entries");
     }
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
@@ -140,6 +147,20 @@ class Model {
   void acceleration(const CVecRef& u, const CVecRef& v, double t, VecRef a, Stats& st) {
     force(u, v, t, a, st);
     mass_.solve_negated_in_place(a);
+  }
+
+  // out_i = sum of |terms| of (K u + C v + f)_i: the scale of its round-off
+  // (forces that cancel, as at a static preload, leave a residual of about
+  // eps times this). A force without magnitude() counts as |f|.
+  void force_magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
+    if constexpr (traits::has_magnitude<Force>::value) {
+      f_.magnitude(u, v, t, out);
+    } else {
+      eval_f(u, v, t, out);
+      out = out.cwiseAbs();
+    }
+    if (has_K_) out.noalias() += K_.cwiseAbs() * u.cwiseAbs();
+    if (has_C_) out.noalias() += C_.cwiseAbs() * v.cwiseAbs();
   }
 
   // ---- energy accounting ----

@@ -9,10 +9,6 @@
 
 namespace nvib {
 
-// Maps a scheme's parameter struct to its stepper: each scheme header specialises it.
-template <class Scheme, class ModelT>
-struct stepper_for;
-
 // Brings the base's state into a derived stepper (a dependent base hides it).
 #define NVIB_STEPPER_STATE(Base) \
   using Base::a_;                \
@@ -27,7 +23,7 @@ template <class ModelT>
 class StepperBase {
  public:
   StepperBase(ModelT model, double h) : model_(std::move(model)), h_(h) {
-    detail::require(std::isfinite(h) && h > 0.0, "dt: the time step must be finite and > 0, got " + detail::fmt(h));
+    NVIB_CHECK(std::isfinite(h) && h > 0.0, "dt", "the time step must be finite and > 0, got " + detail::fmt(h));
     const Index n = model_.size();
     u_.setZero(n);
     v_.setZero(n);
@@ -70,10 +66,10 @@ class StepperBase {
     x.segment(2 * n, n) = a_;
   }
   void check_state(double t, const Vector& x, Index expected) const {
-    detail::require(std::isfinite(t), "t: the time of the state must be finite");
-    detail::require(x.size() == expected, "state: expected " + std::to_string(expected) + " entries, got " +
+    NVIB_CHECK(std::isfinite(t), "t", "the time of the state must be finite");
+    NVIB_CHECK(x.size() == expected, "state", "expected " + std::to_string(expected) + " entries, got " +
                                               std::to_string(x.size()));
-    detail::require(x.allFinite(), "state: the state has non-finite entries");
+    NVIB_CHECK(x.allFinite(), "state", "the state has non-finite entries");
   }
   // [u; v; a; h] for a stepper that carries one more vector h (such as a_{n-1}).
   Vector state_with(const Vector& h) const {
@@ -100,11 +96,11 @@ class StepperBase {
 
   void check_initial(double t0, const Vector& u0, const Vector& v0) const {
     const Index n = model_.size();
-    detail::require(std::isfinite(t0), "t0: the initial time must be finite");
-    detail::require(u0.size() == n, "u0: expected " + std::to_string(n) + " entries, got " + std::to_string(u0.size()));
-    detail::require(v0.size() == n, "v0: expected " + std::to_string(n) + " entries, got " + std::to_string(v0.size()));
-    detail::require(u0.allFinite(), "u0: the initial displacement has non-finite entries");
-    detail::require(v0.allFinite(), "v0: the initial velocity has non-finite entries");
+    NVIB_CHECK(std::isfinite(t0), "t0", "the initial time must be finite");
+    NVIB_CHECK(u0.size() == n, "u0", "expected " + std::to_string(n) + " entries, got " + std::to_string(u0.size()));
+    NVIB_CHECK(v0.size() == n, "v0", "expected " + std::to_string(n) + " entries, got " + std::to_string(v0.size()));
+    NVIB_CHECK(u0.allFinite(), "u0", "the initial displacement has non-finite entries");
+    NVIB_CHECK(v0.allFinite(), "v0", "the initial velocity has non-finite entries");
   }
 
   // Sets {t0, u0, v0} and a0 from the equation of motion (one force evaluation).
@@ -118,7 +114,7 @@ class StepperBase {
     model_.acceleration(u_, v_, t0_, a_, stats_);
     // Every scheme would carry inf or NaN from the first step on: refuse the start.
     for (Index i = 0; i < a_.size(); ++i)
-      detail::require(std::isfinite(a_[i]), "u0, v0: the initial acceleration is not finite (a[" + std::to_string(i) +
+      NVIB_CHECK(std::isfinite(a_[i]), "u0, v0", "the initial acceleration is not finite (a[" + std::to_string(i) +
                                                 "] = " + detail::fmt(a_[i]) + "): the forces overflow at the initial state");
   }
 
@@ -132,13 +128,10 @@ class StepperBase {
     return Status::success;
   }
 
-  Status fail(Status s, double residual_or_nan, std::string why) {
-    failure_.status = s;
-    failure_.step = n_ + 1;
-    failure_.t = t0_ + static_cast<double>(n_ + 1) * h_;
-    failure_.message = std::move(why);
-    (void)residual_or_nan;
-    return s;
+  // A failed step: the stepper keeps its state before the step.
+  Status fail(const Failure& f) {
+    failure_ = f;
+    return f.status;
   }
 
   ModelT model_;

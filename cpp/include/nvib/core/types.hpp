@@ -6,10 +6,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "format.hpp"
 
 namespace nvib {
 
@@ -93,15 +94,6 @@ class SingularMatrixError : public Error { using Error::Error; };
 }
 
 namespace detail {
-inline std::string fmt(double x) {
-  std::ostringstream os;
-  os.precision(6);
-  os << x;
-  return os.str();
-}
-inline void require(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument(what);
-}
 inline bool finite(double x) { return std::isfinite(x); }
 }  // namespace detail
 

@@ -13,10 +13,10 @@ namespace nvib {
 
 // Returns e^{A} - I (the increment), computed with N squarings.
 inline Matrix expm_increment(const Matrix& A, int squarings = 20) {
-  detail::require(A.rows() == A.cols(), "A: expm needs a square matrix");
-  detail::require(squarings >= 0 && squarings <= 60,
-                  "squarings: needs 0 <= squarings <= 60, got " + std::to_string(squarings));
-  detail::require(A.allFinite(), "A: the matrix has non-finite entries");
+  NVIB_CHECK(A.rows() == A.cols(), "A", "expm needs a square matrix");
+  NVIB_CHECK(squarings >= 0 && squarings <= 60, "squarings",
+                  "needs 0 <= squarings <= 60, got " + std::to_string(squarings));
+  NVIB_CHECK(A.allFinite(), "A", "the matrix has non-finite entries");
   const Index n = A.rows();
   const Matrix At = A / std::ldexp(1.0, squarings);
   const Matrix At2 = At * At;
@@ -54,11 +54,11 @@ namespace nvib {
 // F is resized to q matrices (F[j - 1] = F_j).
 inline Matrix expm_increment_with_moments(const Matrix& A, double h, int q, std::vector<Matrix>& F,
                                           int squarings = 20) {
-  detail::require(A.rows() == A.cols(), "A: expm needs a square matrix");
-  detail::require(squarings >= 0 && squarings <= 60,
-                  "squarings: needs 0 <= squarings <= 60, got " + std::to_string(squarings));
-  detail::require(q >= 0 && q <= 8, "q: needs 0 <= q <= 8 moments, got " + std::to_string(q));
-  detail::require(A.allFinite() && std::isfinite(h), "A, h: non-finite entries");
+  NVIB_CHECK(A.rows() == A.cols(), "A", "expm needs a square matrix");
+  NVIB_CHECK(squarings >= 0 && squarings <= 60, "squarings",
+                  "needs 0 <= squarings <= 60, got " + std::to_string(squarings));
+  NVIB_CHECK(q >= 0 && q <= 8, "q", "needs 0 <= q <= 8 moments, got " + std::to_string(q));
+  NVIB_CHECK(A.allFinite() && std::isfinite(h), "A, h", "non-finite entries");
   const Index n = A.rows();
   const double s = std::ldexp(1.0, -squarings);
   const Matrix As = A * s;

@@ -13,20 +13,37 @@
 
 #include <string>
 
+#include "../core/scheme.hpp"
 #include "../core/stepper.hpp"
 
 namespace nvib {
 
+template <class ModelT>
+class CEMDTSStepper;
+
 struct CEMDTS {
+  static constexpr const char* name = "CEMDTS";
+  static constexpr const char* key = "cemdts";
+  static constexpr const char* doc =
+      "Corrected explicit method of double time steps, as reconstructed from the properties stated in "
+      "Yang et al. 2017 (the original formulas were not available). Central-difference displacements for "
+      "every eta; the velocity corrector weighs a_{n-1} by eta (0: LCDM, 1/2: Zhai(1/2, 1/2)); locally third "
+      "order in v at eta = 1/12, globally second order.";
+  static constexpr bool is_explicit = true;
   double eta = 0.45;
 
-  explicit CEMDTS(double eta_ = 0.45) : eta(eta_) {
-    detail::require(std::isfinite(eta) && eta >= 0.0 && eta <= 1.0,
-                    "eta: CEMDTS needs 0 <= eta <= 1, got " + detail::fmt(eta));
+  explicit CEMDTS(double eta_ = 0.45) : eta(eta_) { validate(); }
+
+  template <class Self, class V>
+  static void parameters(Self& s, V&& v) {
+    v(s.eta, param::real("eta", "weight of a_{n-1} in the velocity (0: LCDM, 1/2: Zhai)").range(0.0, 1.0));
   }
-  static int order() { return 2; }
-  static bool is_explicit() { return true; }
-  std::string name() const { return "CEMDTS(eta=" + detail::fmt(eta) + ")"; }
+  void validate() const { param::check_ranges(*this); }
+  std::string label() const { return "CEMDTS(" + detail::short_number(eta) + ")"; }
+  int order_u() const { return 2; }
+  int order_v() const { return 2; }
+  template <class M>
+  using stepper = CEMDTSStepper<M>;
 };
 
 template <class ModelT>
@@ -72,11 +89,6 @@ class CEMDTSStepper : public StepperBase<ModelT> {
  private:
   CEMDTS scheme_;
   Vector aprev_, anew_, vstar_;
-};
-
-template <class ModelT>
-struct stepper_for<CEMDTS, ModelT> {
-  using type = CEMDTSStepper<ModelT>;
 };
 
 }  // namespace nvib

@@ -13,20 +13,36 @@
 
 #include <string>
 
+#include "../core/scheme.hpp"
 #include "../core/stepper.hpp"
 
 namespace nvib {
 
+template <class ModelT>
+class CentralDifferenceStepper;
+
 struct CentralDifference {
+  static constexpr const char* name = "CentralDifference";
+  static constexpr const char* key = "lcdm";
+  static constexpr const char* doc =
+      "Leapfrog central difference method (LCDM). velocity='synchronized' reports v_{n+1} "
+      "(second order); 'half_step' carries and reports v_{n+1/2} (first order against v(t_{n+1})).";
+  static constexpr bool is_explicit = true;
   enum class Velocity { synchronized, half_step };
   Velocity velocity = Velocity::synchronized;
 
   explicit CentralDifference(Velocity vel = Velocity::synchronized) : velocity(vel) {}
-  static int order() { return 2; }
-  static bool is_explicit() { return true; }
-  std::string name() const {
-    return velocity == Velocity::synchronized ? "CentralDifference" : "CentralDifference(half_step)";
+
+  template <class Self, class V>
+  static void parameters(Self& s, V&& v) {
+    v(s.velocity, param::choice("velocity", "velocity carried and reported", {"synchronized", "half_step"}));
   }
+  void validate() const {}
+  std::string label() const { return velocity == Velocity::synchronized ? "LCDM" : "LCDM (half-step v)"; }
+  int order_u() const { return 2; }
+  int order_v() const { return velocity == Velocity::synchronized ? 2 : 1; }
+  template <class M>
+  using stepper = CentralDifferenceStepper<M>;
 };
 
 template <class ModelT>
@@ -86,11 +102,6 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
   CentralDifference scheme_;
   Vector anew_, vstar_;
   bool first_ = true;
-};
-
-template <class ModelT>
-struct stepper_for<CentralDifference, ModelT> {
-  using type = CentralDifferenceStepper<ModelT>;
 };
 
 }  // namespace nvib

@@ -1,6 +1,7 @@
-// Newmark's method (Newmark 1959) with Newton iteration, modified Newton, or
-// the incremental format without equilibrium iteration. It is generalized-alpha
-// with alpha_m = alpha_f = 0 and runs on the same stepper.
+// Newmark's method (Newmark 1959), the equation of each step solved by the
+// Newton component (full Newton, modified, initial tangent, the textbook
+// incremental format, or one iteration). It is generalized-alpha with
+// alpha_m = alpha_f = 0 and runs on the same stepper.
 #pragma once
 
 #include <string>
@@ -9,48 +10,62 @@
 
 namespace nvib {
 
-struct Newmark {
-  double beta = 0.25, gamma = 0.5;
-  Iteration iteration = Iteration::newton;
-  NewtonOptions newton{};
+template <class ModelT>
+class NewmarkStepper;
 
-  explicit Newmark(double b = 0.25, double g = 0.5, Iteration it = Iteration::newton, NewtonOptions nw = {})
-      : beta(b), gamma(g), iteration(it), newton(nw) {
-    as_generalized_alpha();  // validates
+struct Newmark {
+  static constexpr const char* name = "Newmark";
+  static constexpr const char* key = "newmark";
+  static constexpr const char* doc =
+      "Newmark's method (1959): the trapezoidal rule by default (beta = 1/4, gamma = 1/2), beta = 1/6 the "
+      "linear-acceleration method; each step solved by Newton's method (see Newton).";
+  static constexpr bool is_explicit = false;
+  double beta = 0.25, gamma = 0.5;
+  Newton newton{};
+
+  explicit Newmark(double b = 0.25, double g = 0.5, Newton nw = {}) : beta(b), gamma(g), newton(nw) { validate(); }
+
+  template <class Self, class V>
+  static void parameters(Self& s, V&& v) {
+    v(s.beta, param::real("beta", "weight of a_{n+1} in the displacement")
+                  .above(0.0)
+                  .at_most(1.0)
+                  .because("beta = 0 is explicit; use CentralDifference"));
+    v(s.gamma, param::real("gamma", "weight of a_{n+1} in the velocity")
+                   .range(0.5, 1.5)
+                   .because("gamma < 1/2 amplifies the response"));
+    v(s.newton, param::newton("newton", "options of the Newton iteration"));
+  }
+  // Newmark is also used conditionally stable (beta < 1/4, e.g. linear
+  // acceleration), so generalized-alpha's unconditional-stability check does not apply.
+  void validate() const {
+    param::check_ranges(*this);
+    newton.validate();
   }
   GeneralizedAlpha as_generalized_alpha() const {
-    detail::require(std::isfinite(beta) && beta > 0.0 && beta <= 1.0,
-                    "beta: Newmark needs 0 < beta <= 1 (beta = 0 is explicit; use CentralDifference), got " +
-                        detail::fmt(beta));
-    detail::require(std::isfinite(gamma) && gamma >= 0.5 && gamma <= 1.5,
-                    "gamma: Newmark needs 1/2 <= gamma <= 3/2 (gamma < 1/2 amplifies the response), got " +
-                        detail::fmt(gamma));
-    // Newmark is also used conditionally stable (beta < 1/4, e.g. linear acceleration);
-    // build the generalized-alpha parameters without its unconditional-stability check.
-    GeneralizedAlpha ga;  // valid defaults
+    GeneralizedAlpha ga;  // valid defaults, then Newmark's parameters without ga's check
     ga.alpha_m = 0.0;
     ga.alpha_f = 0.0;
     ga.beta = beta;
     ga.gamma = gamma;
-    ga.iteration = iteration;
     ga.newton = newton;
-    ga.newton.validate();
     return ga;
   }
-  int order() const { return std::abs(gamma - 0.5) < 1e-12 ? 2 : 1; }
-  static bool is_explicit() { return false; }
-  std::string name() const {
-    return "Newmark(beta=" + detail::fmt(beta) + ", gamma=" + detail::fmt(gamma) + ", iteration=" +
-           to_string(iteration) + ")";
+  std::string label() const {
+    if (beta == 0.25 && gamma == 0.5) return "Newmark";
+    return "Newmark(" + detail::short_number(beta) + "," + detail::short_number(gamma) + ")";
   }
+  int order_u() const { return std::abs(gamma - 0.5) < 1e-12 ? 2 : 1; }
+  int order_v() const { return order_u(); }
+  template <class M>
+  using stepper = NewmarkStepper<M>;
 };
 
 template <class ModelT>
-struct stepper_for<Newmark, ModelT> {
-  struct type : GeneralizedAlphaStepper<ModelT> {
-    type(const Newmark& scheme, ModelT model, double h)
-        : GeneralizedAlphaStepper<ModelT>(scheme.as_generalized_alpha(), std::move(model), h) {}
-  };
+class NewmarkStepper : public GeneralizedAlphaStepper<ModelT> {
+ public:
+  NewmarkStepper(const Newmark& scheme, ModelT model, double h)
+      : GeneralizedAlphaStepper<ModelT>(scheme.as_generalized_alpha(), std::move(model), h) {}
 };
 
 }  // namespace nvib

@@ -21,32 +21,57 @@
 // history value r_{n+1} is evaluated at the corrected state (P(EC)^k E).
 #pragma once
 
+#include <algorithm>
 #include <string>
 
+#include "../core/scheme.hpp"
 #include "../core/stepper.hpp"
 #include "../linalg/expm.hpp"
 
 namespace nvib {
 
+template <class ModelT>
+class PreciseIntegrationStepper;
+
 struct PreciseIntegration {
+  static constexpr const char* name = "PreciseIntegration";
+  static constexpr const char* key = "pim";
+  static constexpr const char* doc =
+      "Precise integration method (Zhong & Williams 1994): the exponential of the linear part by the 2^N "
+      "algorithm, the nonlinear remainder by a Lagrange predictor-corrector integrated exactly. Dense: its "
+      "set-up is O(n^3) in the number of degrees of freedom.";
+  static constexpr bool is_explicit = true;
   int squarings = 20;
   int order = 2;
   int corrections = 1;
 
   explicit PreciseIntegration(int squarings_ = 20, int order_ = 2, int corrections_ = 1)
       : squarings(squarings_), order(order_), corrections(corrections_) {
-    detail::require(squarings >= 1 && squarings <= 60,
-                    "squarings: needs 1 <= squarings <= 60, got " + std::to_string(squarings));
-    detail::require(order >= 1 && order <= 3, "order: needs 1 <= order <= 3 (the interpolation degree), got " +
-                                                  std::to_string(order));
-    detail::require(corrections >= 0 && corrections <= 10,
-                    "corrections: needs 0 <= corrections <= 10, got " + std::to_string(corrections));
+    validate();
   }
-  static bool is_explicit() { return true; }
-  std::string name() const {
-    return "PreciseIntegration(squarings=" + std::to_string(squarings) + ", order=" + std::to_string(order) +
-           ", corrections=" + std::to_string(corrections) + ")";
+
+  template <class Self, class V>
+  static void parameters(Self& s, V&& v) {
+    v(s.squarings, param::integer("squarings", "2^N squarings of the exponential").range(1, 60));
+    v(s.order, param::integer("order", "degree of the interpolation of the remainder").range(1, 3));
+    v(s.corrections, param::integer("corrections", "corrector passes per step").range(0, 10));
   }
+  void validate() const { param::check_ranges(*this); }
+  std::string label() const {
+    std::string parts;
+    auto add = [&](const std::string& p) { parts += (parts.empty() ? "" : ", ") + p; };
+    if (squarings != 20) add("N=" + std::to_string(squarings));
+    if (order != 2) add("order " + std::to_string(order));
+    if (corrections != 1) add(std::to_string(corrections) + " corr.");
+    return parts.empty() ? "PIM" : "PIM(" + parts + ")";
+  }
+  // Interpolating with degree p gives order p + 1, up to 3: the first step,
+  // with a constant predictor and a linear corrector, leaves an O(h^3) error.
+  // Without a corrector the first step's constant extrapolation leaves O(h^2).
+  int order_u() const { return corrections > 0 ? std::min(order + 1, 3) : 2; }
+  int order_v() const { return order_u(); }
+  template <class M>
+  using stepper = PreciseIntegrationStepper<M>;
 };
 
 namespace detail {
@@ -134,7 +159,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     return x;
   }
   void set_state(double t, const Vector& x) {
-    detail::require(ready_, "set_state: initialize() must come first (it builds the exponential)");
+    NVIB_CHECK(ready_, "set_state", "initialize() must come first (it builds the exponential)");
     this->check_state(t, x, state_size());
     this->unpack_base(t, x);
     const Index n = this->size();
@@ -220,11 +245,6 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   Vector x_, z_, rnew_;
   Matrix R_;
   Index nhist_ = 0;
-};
-
-template <class ModelT>
-struct stepper_for<PreciseIntegration, ModelT> {
-  using type = PreciseIntegrationStepper<ModelT>;
 };
 
 }  // namespace nvib

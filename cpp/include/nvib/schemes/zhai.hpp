@@ -8,23 +8,38 @@
 
 #include <string>
 
+#include "../core/scheme.hpp"
 #include "../core/stepper.hpp"
 
 namespace nvib {
 
+template <class ModelT>
+class ZhaiStepper;
+
 struct Zhai {
+  static constexpr const char* name = "Zhai";
+  static constexpr const char* key = "zhai";
+  static constexpr const char* doc =
+      "Zhai's explicit two-step method (Zhai 1996, IJNME 39:4199), the pure method without a Newmark "
+      "corrector. psi = phi = 1/2: central-difference displacements, second order; phi != 1/2 is first order.";
+  static constexpr bool is_explicit = true;
   double psi = 0.5;
   double phi = 0.5;
 
-  explicit Zhai(double psi_ = 0.5, double phi_ = 0.5) : psi(psi_), phi(phi_) {
-    detail::require(std::isfinite(psi) && psi >= 0.0 && psi <= 1.0,
-                    "psi: Zhai needs 0 <= psi <= 1, got " + detail::fmt(psi));
-    detail::require(std::isfinite(phi) && phi >= 0.0 && phi <= 1.0,
-                    "phi: Zhai needs 0 <= phi <= 1, got " + detail::fmt(phi));
+  explicit Zhai(double psi_ = 0.5, double phi_ = 0.5) : psi(psi_), phi(phi_) { validate(); }
+
+  template <class Self, class V>
+  static void parameters(Self& s, V&& v) {
+    v(s.psi, param::real("psi", "weight of a_{n-1} in the displacement").range(0.0, 1.0));
+    v(s.phi, param::real("phi", "weight of a_{n-1} in the velocity").range(0.0, 1.0));
   }
-  static int order() { return 2; }
-  static bool is_explicit() { return true; }
-  std::string name() const { return "Zhai(psi=" + detail::fmt(psi) + ", phi=" + detail::fmt(phi) + ")"; }
+  void validate() const { param::check_ranges(*this); }
+  std::string label() const { return "Zhai(" + detail::short_number(psi) + "," + detail::short_number(phi) + ")"; }
+  // v_{n+1} - v(t_{n+1}) = (phi - 1/2) h^2 a'(t_n) + O(h^3) per step, and u inherits v's error.
+  int order_u() const { return phi == 0.5 ? 2 : 1; }
+  int order_v() const { return phi == 0.5 ? 2 : 1; }
+  template <class M>
+  using stepper = ZhaiStepper<M>;
 };
 
 template <class ModelT>
@@ -62,11 +77,6 @@ class ZhaiStepper : public StepperBase<ModelT> {
  private:
   Zhai scheme_;
   Vector aprev_;
-};
-
-template <class ModelT>
-struct stepper_for<Zhai, ModelT> {
-  using type = ZhaiStepper<ModelT>;
 };
 
 }  // namespace nvib

@@ -1,0 +1,144 @@
+// The evaluation kernels of EffectSet: effects compiled into flat terms,
+// grouped by law and by how their measures are stored, one loop instantiated
+// per (law, storage) pair.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "../core/types.hpp"
+#include "laws.hpp"
+
+namespace nvib {
+namespace effects {
+namespace compiled {
+
+// unit: d = u_i0 (coefficient 1); difference: d = u_i0 - u_i1 (the common
+// spring or damper between two DOFs); two: any two coefficients; sparse: a
+// list; dense: a row covering at least half the DOFs; dense_first: dense
+// loads, evaluated first, whose first term writes the force vector.
+enum Storage { dense_first = 0, unit = 1, difference = 2, two = 3, sparse = 4, dense = 5 };
+
+// One evaluated effect. Its measure is idx/coef[first, last); one of one or
+// two entries is also kept inline in i0, i1, c0, c1 (c1 = 0 for one), and one
+// covering at least half the DOFs densely in dense[offset, offset + n).
+struct Term {
+  std::int32_t first = 0, last = 0;
+  Index i0 = 0, i1 = 0;
+  double c0 = 0.0, c1 = 0.0;
+  Index offset = 0;
+  LawParams p;
+};
+
+// The flat arrays the terms point into.
+struct Arrays {
+  Index n = 0;
+  std::vector<Index> idx;
+  std::vector<double> coef, rows;  // rows: the dense measures
+  Vector f_const;  // -P of the constant loads
+
+  template <class V>
+  double measure(const Term& c, const V& x) const {
+    double d = 0.0;
+    for (std::int32_t k = c.first; k < c.last; ++k) d += coef[static_cast<size_t>(k)] * x[idx[static_cast<size_t>(k)]];
+    return d;
+  }
+
+  // g . x for storage S.
+  template <Storage S>
+  double measure_of(const Term& c, const double* x) const {
+    if constexpr (S == unit) return x[c.i0];
+    if constexpr (S == difference) return x[c.i0] - x[c.i1];
+    if constexpr (S == two) return c.c0 * x[c.i0] + c.c1 * x[c.i1];
+    if constexpr (S == dense || S == dense_first) {
+      const double* w = rows.data() + c.offset;
+      double d = 0.0;
+      for (Index i = 0; i < n; ++i) d += w[i] * x[i];
+      return d;
+    }
+    double d = 0.0;
+    for (std::int32_t k = c.first; k < c.last; ++k) d += coef[static_cast<size_t>(k)] * x[idx[static_cast<size_t>(k)]];
+    return d;
+  }
+};
+
+// Consecutive terms with the same law and storage; kernel is add_forces<law, storage>.
+// writes: the first group, dense_first: its first term writes the force vector.
+struct Group;
+using Kernel = void (*)(const Arrays&, const Group&, const double*, const double*, double, double*);
+struct Group {
+  Law law;
+  Storage storage;
+  Kernel kernel;
+  const Term *begin, *end;
+  bool writes;
+};
+
+// out += g^T f for every term of the group (or = for the first dense load).
+template <class L, Storage S>
+void add_forces(const Arrays& a, const Group& g, const double* u, const double* v, double t, double* out) {
+  for (const Term* c = g.begin; c != g.end; ++c) {
+    const double d = uses_displacement<L>() ? a.measure_of<S>(*c, u) : 0.0;
+    const double dd = L::uses_velocity ? a.measure_of<S>(*c, v) : 0.0;
+    const double f = L::value(c->p, d, dd, t);
+    if constexpr (S == unit) {
+      out[c->i0] += f;
+    } else if constexpr (S == difference) {
+      out[c->i0] += f;
+      out[c->i1] -= f;
+    } else if constexpr (S == two) {
+      if constexpr (L::id == Law::hertz_contact)
+        if (f == 0.0) continue;  // an open contact adds nothing
+      out[c->i0] += c->c0 * f;
+      out[c->i1] += c->c1 * f;
+    } else if constexpr (S == dense || S == dense_first) {
+      const double* w = a.rows.data() + c->offset;
+      if (S == dense_first && g.writes && c == g.begin) {
+        const double* base = a.f_const.data();
+        for (Index i = 0; i < a.n; ++i) out[i] = base[i] + w[i] * f;
+      } else {
+        for (Index i = 0; i < a.n; ++i) out[i] += w[i] * f;
+      }
+    } else {
+      const Index* idx = a.idx.data();
+      const double* coef = a.coef.data();
+      for (std::int32_t k = c->first; k < c->last; ++k) out[idx[k]] += coef[k] * f;
+    }
+  }
+}
+
+inline Kernel kernel_for(Law law, Storage s) {
+  return dispatch(law, [&](auto L) -> Kernel {
+    using Lw = decltype(L);
+    switch (s) {
+      case dense_first: return &add_forces<Lw, dense_first>;
+      case unit: return &add_forces<Lw, unit>;
+      case difference: return &add_forces<Lw, difference>;
+      case two: return &add_forces<Lw, two>;
+      case dense: return &add_forces<Lw, dense>;
+      case sparse: break;
+    }
+    return &add_forces<Lw, sparse>;
+  });
+}
+
+// K += df/dd g g^T, C += df/dd' g g^T for every term of the group.
+template <class L>
+void add_tangents(const Arrays& a, const Group& g, const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
+  if constexpr (L::is_load) return;  // loads do not depend on the state
+  for (const Term* c = g.begin; c != g.end; ++c) {
+    const double kd = uses_displacement<L>() ? L::stiffness(c->p, a.measure(*c, u), t) : 0.0;
+    const double cd = L::uses_velocity ? L::damping(c->p, a.measure(*c, v)) : 0.0;
+    if (kd == 0.0 && cd == 0.0) continue;
+    MatRef& A = L::uses_velocity ? C : K;
+    const double s = L::uses_velocity ? cd : kd;
+    for (std::int32_t i = c->first; i < c->last; ++i)
+      for (std::int32_t j = c->first; j < c->last; ++j)
+        A(a.idx[static_cast<size_t>(i)], a.idx[static_cast<size_t>(j)]) +=
+            s * a.coef[static_cast<size_t>(i)] * a.coef[static_cast<size_t>(j)];
+  }
+}
+
+}  // namespace compiled
+}  // namespace effects
+}  // namespace nvib

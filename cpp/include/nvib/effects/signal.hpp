@@ -1,0 +1,82 @@
+// Time signals of the effects: a ground acceleration a_g(t), a rail irregularity r(t).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "../core/format.hpp"
+
+namespace nvib {
+namespace effects {
+
+// A time signal: absent (0), a sine, or a table interpolated linearly (0 outside its range).
+struct Signal {
+  enum class Kind { none, sine, table };
+  Kind kind = Kind::none;
+  double amplitude = 0.0, omega = 0.0, phase = 0.0;
+  std::vector<double> t, y;
+
+  static Signal sine(double amplitude, double omega, double phase = 0.0) {
+    NVIB_CHECK(std::isfinite(amplitude) && std::isfinite(omega) && std::isfinite(phase), "signal",
+               "amplitude, omega and phase must be finite");
+    Signal s;
+    s.kind = Kind::sine;
+    s.amplitude = amplitude;
+    s.omega = omega;
+    s.phase = phase;
+    return s;
+  }
+  static Signal table(std::vector<double> times, std::vector<double> values) {
+    NVIB_CHECK(times.size() == values.size(), "signal", "t and values must have the same length");
+    NVIB_CHECK(times.size() >= 2, "signal", "a table needs at least two points");
+    for (size_t i = 0; i < times.size(); ++i) {
+      NVIB_CHECK(std::isfinite(times[i]) && std::isfinite(values[i]), "signal", "non-finite table entry");
+      if (i > 0) NVIB_CHECK(times[i] > times[i - 1], "signal", "table times must increase strictly");
+    }
+    Signal s;
+    s.kind = Kind::table;
+    s.t = std::move(times);
+    s.y = std::move(values);
+    return s;
+  }
+
+  bool present() const { return kind != Kind::none; }
+
+  double value(double time) const {
+    switch (kind) {
+      case Kind::none: return 0.0;
+      case Kind::sine: return amplitude * std::sin(omega * time + phase);
+      case Kind::table: {
+        if (time < t.front() || time > t.back()) return 0.0;
+        const size_t i = segment(time);
+        const double w = (time - t[i]) / (t[i + 1] - t[i]);
+        return (1.0 - w) * y[i] + w * y[i + 1];
+      }
+    }
+    return 0.0;
+  }
+  double derivative(double time) const {
+    switch (kind) {
+      case Kind::none: return 0.0;
+      case Kind::sine: return amplitude * omega * std::cos(omega * time + phase);
+      case Kind::table: {
+        if (time < t.front() || time > t.back()) return 0.0;
+        const size_t i = segment(time);
+        return (y[i + 1] - y[i]) / (t[i + 1] - t[i]);
+      }
+    }
+    return 0.0;
+  }
+
+ private:
+  size_t segment(double time) const {
+    const auto it = std::upper_bound(t.begin(), t.end(), time);
+    size_t i = static_cast<size_t>(it - t.begin());
+    i = i == 0 ? 0 : i - 1;
+    return std::min(i, t.size() - 2);
+  }
+};
+
+}  // namespace effects
+}  // namespace nvib
