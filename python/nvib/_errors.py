@@ -1,27 +1,37 @@
-"""Exceptions raised by nvib runs (bad input raises ValueError/TypeError naming the argument)."""
+"""Exceptions: a run that stopped early raises an NvibError (carrying the
+failure and the partial result); bad input raises ArgumentError (a
+ValueError) or ArgumentTypeError (a TypeError), whose ``.argument`` names it."""
 
 from __future__ import annotations
 
+from ._core import ArgumentError, ArgumentTypeError, Status
+
+__all__ = ["ArgumentError", "ArgumentTypeError", "ConvergenceError", "DivergenceError", "NvibError",
+           "SingularMatrixError", "error_for"]
+
+ArgumentError.__module__ = ArgumentTypeError.__module__ = "nvib"
+
 
 class NvibError(RuntimeError):
-    """A run stopped before t_end. ``result`` holds the partial trajectory."""
+    """A run stopped before t_end. ``failure`` says where and why; ``result`` holds the partial trajectory
+    (None when stepping by hand); ``t``, ``step``, ``dof`` and ``residuals`` are the failure's."""
 
-    def __init__(self, message: str, failure: dict | None = None, result=None):
+    def __init__(self, message: str, failure=None, result=None):
         super().__init__(message)
-        failure = failure or {}
+        self.failure = failure
         self.result = result
-        self.t = failure.get("t")
-        self.step = failure.get("step")
-        self.dof = failure.get("dof")
-        self.residuals = list(failure.get("residuals", []))
+        self.t = failure.t if failure is not None else None
+        self.step = failure.step if failure is not None else None
+        self.dof = failure.dof if failure is not None else None
+        self.residuals = list(failure.residuals) if failure is not None else []
 
 
 class DivergenceError(NvibError):
-    """The state became non-finite or left the displacement bound (time, step and DOF given)."""
+    """The state became non-finite, left the displacement bound or created energy (time, step and DOF given)."""
 
 
 class ConvergenceError(NvibError):
-    """Newton's iteration did not converge within max_iter (time, step and residual history given)."""
+    """Newton's iteration did not converge, or stalled above its tolerance (time, step and residual history)."""
 
 
 class SingularMatrixError(NvibError):
@@ -29,12 +39,12 @@ class SingularMatrixError(NvibError):
 
 
 _BY_STATUS = {
-    "diverged": DivergenceError,
-    "newton_failed": ConvergenceError,
-    "singular_matrix": SingularMatrixError,
+    Status.diverged: DivergenceError,
+    Status.newton_failed: ConvergenceError,
+    Status.singular_matrix: SingularMatrixError,
 }
 
 
-def error_for(status: str, failure: dict, result) -> NvibError:
-    cls = _BY_STATUS.get(status, NvibError)
-    return cls(failure.get("message") or status, failure, result)
+def error_for(failure, result=None) -> NvibError:
+    """The exception for a failure (a ``Failure``), carrying the partial result."""
+    return _BY_STATUS.get(failure.status, NvibError)(failure.message or failure.status.name, failure, result)

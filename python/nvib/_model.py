@@ -7,57 +7,45 @@ import numbers
 import numpy as np
 
 from . import _checks, _core
+from ._core import ArgumentError
 
-# Parameters of each built-in effect type: (required, optional-with-default).
-# `hertz_contact.irregularity` and `ground_acceleration.signal` are signals
-# (see _signal); every effect may carry a `name` and a free-text `note`.
-EFFECT_PARAMETERS: dict[str, tuple[tuple[str, ...], dict[str, object]]] = {
-    "spring": (("k",), {}),
-    "damper": (("c",), {}),
-    "hardening_spring": (("k0", "a"), {}),
-    "cubic_spring": (("k3",), {}),
-    "power_damper": (("c", "p"), {}),
-    "pendulum_gravity": (("m", "g", "l"), {}),
-    "hertz_contact": (("G",), {"contacts": 1.0, "irregularity": None}),
-    "constant_force": (("value",), {}),
-    "harmonic_force": (("amplitude", "omega"), {"phase": 0.0}),
-    "ground_acceleration": (("signal",), {}),
-}
+def _effect_parameters() -> dict[str, tuple[tuple[str, ...], dict[str, object]]]:
+    """(required, optional-with-default) parameters of each built-in effect type, from the C++ laws;
+    a law's signal (``irregularity``, ``signal``) is a parameter too (a table, see ``_signal``)."""
+    out = {}
+    for kind, law in _core.laws().items():
+        required = tuple(name for name, default in law["parameters"] if default is None)
+        optional = {name: default for name, default in law["parameters"] if default is not None}
+        if law["signal"]:
+            if law["signal_required"]:
+                required += (law["signal"],)
+            else:
+                optional[law["signal"]] = None
+        out[kind] = (required, optional)
+    return out
+
+
+EFFECT_PARAMETERS = _effect_parameters()
+"""Parameters of each built-in effect type: (required, optional with their defaults). Every effect may
+also carry a ``name`` and a free-text ``note``."""
 _COMMON_KEYS = ("type", "measure", "name", "note")
 _SIGNAL_KEYS = {"sine": (("amplitude", "omega"), {"phase": 0.0}), "table": (("t", "values"), {})}
-
-
-def _effect_params(kind: str, p: dict) -> tuple[float, float, float]:
-    if kind == "hardening_spring":
-        return p["k0"], p["a"], 0.0
-    if kind == "power_damper":
-        return p["c"], p["p"], 0.0
-    if kind == "pendulum_gravity":
-        return p["m"] * p["g"] * p["l"], 0.0, 0.0
-    if kind == "harmonic_force":
-        return p["amplitude"], p["omega"], p["phase"]
-    if kind == "hertz_contact":
-        return p["G"], p["contacts"], 0.0
-    if kind == "ground_acceleration":
-        return 0.0, 0.0, 0.0
-    (only,) = EFFECT_PARAMETERS[kind][0]
-    return p[only], 0.0, 0.0
 
 
 def _signal(where: str, spec) -> dict:
     """A signal: {kind = "sine", amplitude, omega, phase = 0} or {kind = "table", t = [...], values = [...]}."""
     if not isinstance(spec, dict):
-        raise TypeError(f"{where}: expected a table with 'kind' = 'sine' or 'table', got {type(spec).__name__}")
+        raise _checks.type_error(where, f"expected a table with 'kind' = 'sine' or 'table', got {type(spec).__name__}")
     kind = spec.get("kind")
     if kind not in _SIGNAL_KEYS:
-        raise ValueError(f"{where}.kind: expected 'sine' or 'table', got {kind!r}")
+        raise _checks.value_error(f"{where}.kind", f"expected 'sine' or 'table', got {kind!r}")
     required, optional = _SIGNAL_KEYS[kind]
     for key in spec:
         if key != "kind" and key not in required and key not in optional:
-            raise ValueError(f"{where}.{key}: unknown key for a {kind} signal (expected {', '.join(required + tuple(optional))})")
+            raise _checks.value_error(f"{where}.{key}", f"unknown key for a {kind} signal (expected {', '.join(required + tuple(optional))})")
     for key in required:
         if key not in spec:
-            raise ValueError(f"{where}.{key}: missing")
+            raise _checks.value_error(f"{where}.{key}", f"missing")
     out = {"signal": kind}
     if kind == "sine":
         out["amplitude"] = _checks.real(f"{where}.amplitude", spec["amplitude"])
@@ -67,13 +55,13 @@ def _signal(where: str, spec) -> dict:
         t = _checks.real_array(f"{where}.t", spec["t"])
         y = _checks.real_array(f"{where}.values", spec["values"])
         if t.ndim != 1 or t.size < 2:
-            raise ValueError(f"{where}.t: expected a list of at least two times")
+            raise _checks.value_error(f"{where}.t", f"expected a list of at least two times")
         if y.shape != t.shape:
-            raise ValueError(f"{where}.values: expected {t.size} values (as many as t), got {y.size}")
+            raise _checks.value_error(f"{where}.values", f"expected {t.size} values (as many as t), got {y.size}")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
-            raise ValueError(f"{where}: the table contains NaN or Inf")
+            raise _checks.value_error(where, f"the table contains NaN or Inf")
         if np.any(np.diff(t) <= 0):
-            raise ValueError(f"{where}.t: times must increase strictly")
+            raise _checks.value_error(f"{where}.t", f"times must increase strictly")
         out["t"], out["values"] = t.tolist(), y.tolist()
     return out
 
@@ -107,31 +95,31 @@ class Model:
                  u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
         m = np.ascontiguousarray(_checks.real_array("mass", [mass] if isinstance(mass, numbers.Real) else mass))
         if m.ndim not in (1, 2):
-            raise ValueError(f"mass: expected a 1-D array (diagonal) or a 2-D matrix, got {m.ndim} dimensions")
+            raise _checks.value_error("mass", f"expected a 1-D array (diagonal) or a 2-D matrix, got {m.ndim} dimensions")
         n = m.shape[0]
         if n == 0:
-            raise ValueError("mass: the model needs at least one degree of freedom")
+            raise _checks.value_error("mass", "the model needs at least one degree of freedom")
         self.n = n
         if dofs is None:
             dofs = [f"u{i}" for i in range(n)]
         if isinstance(dofs, (str, bytes)) or not hasattr(dofs, "__iter__"):
-            raise TypeError(f"dofs: expected a list of {n} names, got {type(dofs).__name__}")
+            raise _checks.type_error("dofs", f"expected a list of {n} names, got {type(dofs).__name__}")
         dofs = [str(d) for d in dofs]
         if len(dofs) != n:
-            raise ValueError(f"dofs: expected {n} names, got {len(dofs)}")
+            raise _checks.value_error("dofs", f"expected {n} names, got {len(dofs)}")
         if len(set(dofs)) != n:
-            raise ValueError("dofs: names must be unique")
+            raise _checks.value_error("dofs", "names must be unique")
         self.dofs = dofs
         Km = _checks.matrix("K", K, n) if K is not None else np.zeros((0, 0))
         Cm = _checks.matrix("C", C, n) if C is not None else np.zeros((0, 0))
         self.u0 = _checks.vector("u0", np.zeros(n) if u0 is None else u0, n)
         self.v0 = _checks.vector("v0", np.zeros(n) if v0 is None else v0, n)
         if force is not None and not callable(force):
-            raise TypeError(f"force: expected a callable force(u, v, t), got {type(force).__name__}")
+            raise _checks.type_error("force", f"expected a callable force(u, v, t), got {type(force).__name__}")
         if tangent is not None and not callable(tangent):
-            raise TypeError(f"tangent: expected a callable tangent(u, v, t) -> (K, C), got {type(tangent).__name__}")
+            raise _checks.type_error("tangent", f"expected a callable tangent(u, v, t) -> (K, C), got {type(tangent).__name__}")
         if tangent is not None and force is None:
-            raise ValueError("tangent: given without a force")
+            raise _checks.value_error("tangent", "given without a force")
         self.force = force
         self.tangent = tangent
         self.name = str(name)
@@ -147,8 +135,8 @@ class Model:
                 if w not in known:
                     names = sorted({str(e.get("name")) for e in effects if isinstance(e, dict) and e.get("name")})
                     types = sorted({str(e.get("type")) for e in effects if isinstance(e, dict) and e.get("type")})
-                    raise ValueError(f"without: no effect named or typed {w!r} in this model "
-                                     f"(names: {', '.join(names) or 'none'}; types: {', '.join(types)})")
+                    raise _checks.value_error("without", f"no effect named or typed {w!r} in this model "
+                                              f"(names: {', '.join(names) or 'none'}; types: {', '.join(types)})")
             for i, e in enumerate(effects):
                 if isinstance(e, dict) and (e.get("name") in self.without or e.get("type") in self.without):
                     continue
@@ -159,13 +147,9 @@ class Model:
             self.effects = builtin
             self.python_laws = [law[4] for law in laws]
         elif self.without:
-            raise ValueError("without: only a model of declared effects can leave effects out")
-        if force is None and not laws:
-            self._core = _core.EffectModel(m, builtin, Km, Cm)
-        else:
-            # Python in the loop: the GIL is kept for the run.
-            self._core = _core.HybridModel(m, builtin, Km, Cm, force, tangent, bool(uses_velocity),
-                                           bool(uses_time), laws)
+            raise _checks.value_error("without", "only a model of declared effects can leave effects out")
+        # With Python in the loop (force or callable laws) the GIL is kept during runs.
+        self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, bool(uses_velocity), bool(uses_time), laws)
 
     def _python_law(self, i: int, spec: dict):
         """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},
@@ -175,81 +159,81 @@ class Model:
         allowed = {"type", "measure", "law", "tangent", "uses_velocity", "uses_time", "name", "note"}
         for key in spec:
             if key not in allowed:
-                raise ValueError(f"{where}.{key}: unknown key of a callable effect (expected "
+                raise _checks.value_error(f"{where}.{key}", f"unknown key of a callable effect (expected "
                                  f"{', '.join(sorted(allowed - {'type'}))})")
         law = spec.get("law")
         if not callable(law):
-            raise TypeError(f"{where}.law: expected a callable law(d, dd, t) -> float, got {type(law).__name__}")
+            raise _checks.type_error(f"{where}.law", f"expected a callable law(d, dd, t) -> float, got {type(law).__name__}")
         tangent = spec.get("tangent")
         if tangent is not None and not callable(tangent):
-            raise TypeError(f"{where}.tangent: expected a callable tangent(d, dd, t) -> (df/dd, df/ddd), "
+            raise _checks.type_error(f"{where}.tangent", f"expected a callable tangent(d, dd, t) -> (df/dd, df/ddd), "
                             f"got {type(tangent).__name__}")
         measure = spec.get("measure")
         if not isinstance(measure, dict) or not measure:
-            raise ValueError(f"{where}.measure: expected a non-empty mapping DOF -> coefficient")
+            raise _checks.value_error(f"{where}.measure", f"expected a non-empty mapping DOF -> coefficient")
         index = [self._dof_index(f"{where}.measure", k) for k in measure]
         coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
         flags = []
         for key in ("uses_velocity", "uses_time"):
             value = spec.get(key, True)
             if not isinstance(value, bool):
-                raise TypeError(f"{where}.{key}: expected True or False, got {value!r}")
+                raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
             flags.append(value)
         name = spec.get("name", "")
         if not isinstance(name, str):
-            raise TypeError(f"{where}.name: expected a string")
+            raise _checks.type_error(f"{where}.name", f"expected a string")
         return (index, coef, law, tangent, where, *flags)
 
     def _dof_index(self, where: str, key) -> int:
         if isinstance(key, numbers.Integral) and not isinstance(key, bool):
             if not 0 <= int(key) < self.n:
-                raise ValueError(f"{where}: DOF index {key} is out of range for {self.n} degrees of freedom")
+                raise _checks.value_error(where, f"DOF index {key} is out of range for {self.n} degrees of freedom")
             return int(key)
         if key in self.dofs:
             return self.dofs.index(key)
-        raise ValueError(f"{where}: unknown DOF {key!r} (known: {', '.join(self.dofs)})")
+        raise _checks.value_error(where, f"unknown DOF {key!r} (known: {', '.join(self.dofs)})")
 
     def _effect(self, i: int, spec) -> "_core.Effect":
         where = f"effects[{i}]"
         if not isinstance(spec, dict):
-            raise TypeError(f"{where}: expected a dict with 'type' and 'measure', got {type(spec).__name__}")
+            raise _checks.type_error(where, f"expected a dict with 'type' and 'measure', got {type(spec).__name__}")
         kind = spec.get("type")
         if kind not in EFFECT_PARAMETERS:
-            raise ValueError(f"{where}.type: unknown effect type {kind!r} "
-                             f"(known: {', '.join(EFFECT_PARAMETERS)}, callable)")
+            raise _checks.value_error(f"{where}.type", f"unknown effect type {kind!r} "
+                                      f"(known: {', '.join(EFFECT_PARAMETERS)}, callable)")
         if "measure" in spec:
             measure = spec["measure"]
             if not isinstance(measure, dict) or not measure:
-                raise ValueError(f"{where}.measure: expected a non-empty mapping DOF -> coefficient")
+                raise _checks.value_error(f"{where}.measure", f"expected a non-empty mapping DOF -> coefficient")
         elif kind == "ground_acceleration":
             measure = {d: 1.0 for d in self.dofs}  # every DOF moves with the ground
         else:
-            raise ValueError(f"{where}.measure: missing")
+            raise _checks.value_error(f"{where}.measure", f"missing")
         index = [self._dof_index(f"{where}.measure", k) for k in measure]
         coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
         required, optional = EFFECT_PARAMETERS[kind]
         for key in spec:
             if key not in _COMMON_KEYS and key not in required and key not in optional:
-                raise ValueError(f"{where}.{key}: unknown parameter of {kind} (expected {', '.join(required + tuple(optional))})")
+                raise _checks.value_error(f"{where}.{key}", f"unknown parameter of {kind} (expected {', '.join(required + tuple(optional))})")
         for key in required:
             if key not in spec:
-                raise ValueError(f"{where}.{key}: missing parameter of {kind}")
-        params = dict(optional)
-        signal: dict = {}
+                raise _checks.value_error(f"{where}.{key}", f"missing parameter of {kind}")
+        signal_key = _core.laws()[kind]["signal"]
+        params, signal = {}, {}
         for key in list(required) + list(optional):
             if key not in spec:
                 continue
-            if key in ("signal", "irregularity"):
+            if key == signal_key:
                 signal = _signal(f"{where}.{key}", spec[key])
             else:
                 params[key] = _checks.real(f"{where}.{key}", spec[key])
         name = spec.get("name", "")
         if not isinstance(name, str):
-            raise TypeError(f"{where}.name: expected a string")
+            raise _checks.type_error(f"{where}.name", f"expected a string")
         try:
-            return _core.Effect(kind, index, coef, *_effect_params(kind, params), name=name, **signal)
-        except ValueError as exc:
-            raise ValueError(f"{where}: {exc}") from None
+            return _core.Effect(kind, index, coef, params, name=name, **signal)
+        except ArgumentError as exc:  # names the parameter: make it effects[i].<parameter>
+            raise _checks.value_error(f"{where}.{exc.argument}", str(exc).split(": ", 1)[1]) from None
 
     @property
     def uses_velocity(self) -> bool:
@@ -286,40 +270,17 @@ class Model:
         return np.sqrt(np.clip(w2, 0.0, None))
 
     def static_equilibrium(self, t: float = 0.0, u_guess=None, *, rtol: float = 1e-12, max_iter: int = 200) -> np.ndarray:
-        """Displacement where K u + F(u, 0, t) = 0 (the constant loads balanced), by Newton's method.
+        """Displacement where K u + F(u, 0, t) = 0 (the constant loads balanced), by the Newton component:
+        converged when the residual is below rtol times the loads seen from the guess.
 
         Where the tangent stiffness is singular (a body held only by a contact
-        that is not yet closed, a free-floating vehicle), the step is
-        regularised with a mass-proportional term, like an implicit dynamic
-        step, until the tangent becomes regular.
+        that is not yet closed, a free-floating vehicle), the iteration matrix
+        gets a mass-proportional term, like an implicit dynamic step, until the
+        tangent is regular again. A body that nothing holds raises an
+        ArgumentError naming ``initial``.
         """
         t = _checks.real("t", t)
         rtol = _checks.real("rtol", rtol, positive=True)
         max_iter = _checks.integer("max_iter", max_iter, minimum=1)
-        u = np.zeros(self.n) if u_guess is None else _checks.vector("u_guess", u_guess, self.n).copy()
-        v = np.zeros(self.n)
-        mdiag = np.diag(self.mass_matrix)
-        scale = None
-        for _ in range(max_iter):
-            r = self.evaluate_force(u, v, t)
-            K, _ = self.tangent_matrices(u, v, t)
-            if scale is None:
-                scale = max(np.max(np.abs(r)), 1e-300)
-            if np.linalg.cond(K) < 1e13:
-                du = np.linalg.solve(K, -r)
-            else:
-                # mu ~ a squared frequency: a thousandth of the stiffest DOF's, or
-                # 1 rad^2/s^2 where nothing is stiff yet (a body on open contacts).
-                ratio = np.max(np.abs(np.diag(K)) / mdiag)
-                mu = 1e-3 * ratio if ratio > 0 else 1.0
-                du = np.linalg.solve(K + mu * np.diag(mdiag), -r)
-            u += du
-            if not np.all(np.isfinite(u)):
-                break
-            if np.max(np.abs(du)) <= rtol * max(np.max(np.abs(u)), 1e-300):
-                r = self.evaluate_force(u, v, t)
-                if np.max(np.abs(r)) <= 1e-8 * scale:
-                    return u
-        raise ValueError(f"initial: static_equilibrium did not converge in {max_iter} Newton iterations; "
-                         "a body that no spring or contact holds against a constant load has no static "
-                         "equilibrium (was a support left out?)")
+        u = np.zeros(self.n) if u_guess is None else _checks.vector("u_guess", u_guess, self.n)
+        return self._core.static_equilibrium(t, u, rtol, max_iter)

@@ -37,7 +37,7 @@ def scene_path(name_or_path: str) -> str:
         return name_or_path
     path = os.path.join(SCENE_DIR, name_or_path + ".toml")
     if not os.path.isfile(path):
-        raise ValueError(f"scene: unknown scene {name_or_path!r} (built-in: {', '.join(scene_names())})")
+        raise _checks.value_error("scene", f"unknown scene {name_or_path!r} (built-in: {', '.join(scene_names())})")
     return path
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _checks
+
 MAX_POINTS = 50_000  # per curve; longer histories are thinned evenly (always keeping the last point)
 MAX_OTHER_DOFS = 4   # beside the highlighted DOF when a model has more than MAX_ALL_DOFS
 MAX_ALL_DOFS = 6
@@ -43,11 +45,11 @@ def _dof_column(result, model, dof) -> int:
     names = list(result.dofs)
     if isinstance(dof, (int, np.integer)) and not isinstance(dof, bool):
         if not 0 <= int(dof) < model.n:
-            raise ValueError(f"dof: index {dof} is out of range for {model.n} degrees of freedom")
+            raise _checks.value_error("dof", f"index {dof} is out of range for {model.n} degrees of freedom")
         dof = model.dofs[int(dof)]
     if dof not in names:
         where = "the model" if dof not in model.dofs else "the saved DOFs of this result"
-        raise ValueError(f"dof: {dof!r} is not in {where} (saved: {', '.join(names)})")
+        raise _checks.value_error("dof", f"{dof!r} is not in {where} (saved: {', '.join(names)})")
     return names.index(dof)
 
 

@@ -22,26 +22,28 @@ import math
 
 import numpy as np
 
+from .. import _checks
+
 
 def _params(**kw):
     """Named checks: masses and stiffnesses > 0, the rest finite (a, c >= 0)."""
-    from ._checks import real
+    from .._checks import real
 
     out = []
     for name, x in kw.items():
         x = real(name, x, positive=name in ("m", "k", "k0"))
         if name in ("a", "c") and x < 0.0:
-            raise ValueError(f"{name}: must be >= 0, got {x}")
+            raise _checks.value_error(name, f"must be >= 0, got {x}")
         out.append(x)
     return out
 
 
 def _times(t):
-    from ._checks import real_array
+    from .._checks import real_array
 
     t = real_array("t", t)
     if not np.all(np.isfinite(t)):
-        raise ValueError("t: contains NaN or Inf")
+        raise _checks.value_error("t", "contains NaN or Inf")
     return t
 
 
@@ -52,7 +54,7 @@ def linear_sdof(t, *, m: float, k: float, c: float = 0.0, x0: float = 1.0, v0: f
     w = math.sqrt(k / m)
     xi = c / (2.0 * m * w)
     if not 0.0 <= xi < 1.0:
-        raise ValueError(f"c: the closed form needs a damping ratio in [0, 1), got {xi}")
+        raise _checks.value_error("c", f"the closed form needs a damping ratio in [0, 1), got {xi}")
     wd = w * math.sqrt(1.0 - xi * xi)
     B = (v0 + xi * w * x0) / wd
     env = np.exp(-xi * w * t)
@@ -106,14 +108,14 @@ def hardening_period(*, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: 
 def _pendulum_parameters(omega0: float, theta0: float, v0: float) -> tuple[float, float]:
     """(modulus k, phase u0) of theta = 2 arcsin(k sn(w0 t + u0 | k^2))."""
     from scipy import special
-    from ._checks import real
+    from .._checks import real
 
     omega0 = real("omega0", omega0, positive=True)
     theta0, v0 = _params(theta0=theta0, v0=v0)
     s = math.sin(0.5 * theta0)
     k2 = s * s + v0 * v0 / (4.0 * omega0 * omega0)
     if not k2 < 1.0:
-        raise ValueError(f"theta0, v0: the pendulum goes over the top (k^2 = {k2:.6g} >= 1); "
+        raise _checks.value_error("theta0, v0", f"the pendulum goes over the top (k^2 = {k2:.6g} >= 1); "
                          "the closed form here covers the swinging pendulum only")
     k = math.sqrt(k2)
     if k == 0.0:
@@ -145,7 +147,7 @@ def pendulum_period(*, omega0: float = 1.0, theta0: float, v0: float = 0.0) -> f
 
 def hardening_energy(x, v, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0):
     """Kinetic plus potential energy m v^2/2 + k0 (x^2/2 + a x^4/4)."""
-    from ._checks import real_array
+    from .._checks import real_array
 
     m, k0, a = _params(m=m, k0=k0, a=a)
     x = real_array("x", x)

@@ -32,8 +32,9 @@ import weakref
 
 import numpy as np
 
-from . import _checks, exact
-from ._model import Model
+from .. import _checks
+from .._model import Model
+from . import exact
 
 DOP853_RTOL = 1e-12
 SCALE_FLOOR = 1e-3  # a component's tolerance scale is at least this fraction of its kind's largest peak
@@ -67,10 +68,10 @@ class Reference:
     def __call__(self, t) -> tuple[np.ndarray, np.ndarray]:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if t.ndim != 1:
-            raise ValueError(f"t: expected a 1-D array of times, got shape {t.shape}")
+            raise _checks.value_error("t", f"expected a 1-D array of times, got shape {t.shape}")
         span = self.t_end - self.t0
         if t.size and (t.min() < self.t0 - 1e-9 * span or t.max() > self.t_end + 1e-9 * span):
-            raise ValueError(f"t: the reference covers [{self.t0:g}, {self.t_end:g}], "
+            raise _checks.value_error("t", f"the reference covers [{self.t0:g}, {self.t_end:g}], "
                              f"got times in [{t.min():g}, {t.max():g}]")
         return self._evaluate(t)
 
@@ -90,11 +91,11 @@ class Reference:
         for d in dofs:
             if isinstance(d, str):
                 if d not in self.dofs:
-                    raise ValueError(f"dofs: unknown DOF {d!r} (known: {', '.join(self.dofs)})")
+                    raise _checks.value_error("dofs", f"unknown DOF {d!r} (known: {', '.join(self.dofs)})")
                 out.append(self.dofs.index(d))
             else:
                 if not 0 <= int(d) < self.n:
-                    raise ValueError(f"dofs: index {d} out of range for {self.n} DOFs")
+                    raise _checks.value_error("dofs", f"index {d} out of range for {self.n} DOFs")
                 out.append(int(d))
         return out
 
@@ -172,7 +173,7 @@ def tolerance_scale(model: Model, t0: float, t_end: float, u0: np.ndarray, v0: n
     base = max(1.0, float(np.max(np.abs(y0))))
     sol = solve_ivp(sys.rhs, (t0, t_end), y0, method="DOP853", rtol=1e-6, atol=1e-9 * base)
     if not sol.success or not np.all(np.isfinite(sol.y)):
-        raise ValueError(f"model: the pilot solve for the tolerance scales failed ({sol.message})")
+        raise _checks.value_error("model", f"the pilot solve for the tolerance scales failed ({sol.message})")
     return scale_from_peaks(np.max(np.abs(sol.y), axis=1), model.n)
 
 
@@ -292,7 +293,7 @@ def _segmented_dop853(model: Model, t0: float, t_end: float, y0: np.ndarray, rto
         sol = solve_ivp(sys.rhs, (t, t_end), y, method="DOP853", rtol=rtol, atol=atol, dense_output=True,
                         events=events or None)
         if sol.status == -1 or not np.all(np.isfinite(sol.y)):
-            raise ValueError(f"model: the DOP853 reference failed at t = {sol.t[-1]:g} ({sol.message})")
+            raise _checks.value_error("model", f"the DOP853 reference failed at t = {sol.t[-1]:g} ({sol.message})")
         if sol.t[-1] > t:
             pieces.append(sol.sol)
             ends.append(sol.t[-1])
@@ -300,7 +301,7 @@ def _segmented_dop853(model: Model, t0: float, t_end: float, y0: np.ndarray, rto
             break
         t, y = float(sol.t[-1]), sol.y[:, -1].copy()
     else:
-        raise ValueError("model: the DOP853 reference stopped at 100000 contact events")
+        raise _checks.value_error("model", "the DOP853 reference stopped at 100000 contact events")
     return pieces, np.array(ends), sys.num_rhs
 
 
@@ -327,16 +328,16 @@ def reference(model: Model, t_end: float, *, t0: float = 0.0, u0=None, v0=None, 
     ``check_difference``. References are cached per model within the process
     (same t0, t_end, initial state, method and rtol)."""
     if not isinstance(model, Model):
-        raise TypeError(f"model: expected nvib.Model, got {type(model).__name__}")
+        raise _checks.type_error("model", f"expected nvib.Model, got {type(model).__name__}")
     t0 = _checks.real("t0", t0)
     t_end = _checks.real("t_end", t_end)
     if t_end <= t0:
-        raise ValueError(f"t_end: must be > t0 = {t0}, got {t_end}")
+        raise _checks.value_error("t_end", f"must be > t0 = {t0}, got {t_end}")
     if method not in ("auto", "closed_form", "dop853"):
-        raise ValueError(f"method: expected 'auto', 'closed_form' or 'dop853', got {method!r}")
+        raise _checks.value_error("method", f"expected 'auto', 'closed_form' or 'dop853', got {method!r}")
     rtol = _checks.real("rtol", rtol, positive=True)
     if not 2.3e-14 <= rtol < 1.0:
-        raise ValueError(f"rtol: must be in [2.3e-14, 1) (DOP853 cannot go below 100 machine epsilons), got {rtol}")
+        raise _checks.value_error("rtol", f"must be in [2.3e-14, 1) (DOP853 cannot go below 100 machine epsilons), got {rtol}")
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     key = (t0, t_end, u0.tobytes(), v0.tobytes(), method, rtol)
@@ -355,7 +356,7 @@ def reference(model: Model, t_end: float, *, t0: float = 0.0, u0=None, v0=None, 
 
         ref = Reference(model, "closed_form", description, t0, t_end, evaluate)
     elif method == "closed_form":
-        raise ValueError("method: no closed form is known for this model (one DOF with linear springs and "
+        raise _checks.value_error("method", "no closed form is known for this model (one DOF with linear springs and "
                          "dampers, one hardening spring, or one swinging pendulum); use 'auto' or 'dop853'")
     else:
         scale = tolerance_scale(model, t0, t_end, u0, v0)

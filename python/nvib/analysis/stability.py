@@ -52,10 +52,11 @@ import math
 
 import numpy as np
 
-from . import _checks, _labels
-from ._errors import NvibError
-from ._model import Model
-from ._solve import Stepper, _check_scheme
+from .. import _checks, _labels
+from .._errors import NvibError
+from .._model import Model
+from .._schemes import check_scheme
+from .._solve import Stepper
 
 OMEGA_START = 1e-3   # where the principal roots are picked out (nearest the exact root)
 OMEGA_LIMIT = 1e4    # default upper end of the search for Ω_crit
@@ -72,28 +73,28 @@ _MIN_RATIO = 1e-9    # below this step (relative) an ambiguous match is accepted
 def _check_xi(xi) -> float:
     xi = _checks.real("xi", xi)
     if not 0.0 <= xi < 1.0:
-        raise ValueError(f"xi: the damping ratio needs 0 <= xi < 1, got {xi}")
+        raise _checks.value_error("xi", f"the damping ratio needs 0 <= xi < 1, got {xi}")
     return xi
 
 
 def _omegas(omega_h) -> tuple[np.ndarray, tuple]:
     """Ω as a flat float array and the shape to give results (() for a scalar)."""
     if isinstance(omega_h, (bool, np.bool_)):
-        raise TypeError("omega_h: expected a real number or an array of them, got bool")
+        raise _checks.type_error("omega_h", "expected a real number or an array of them, got bool")
     try:
         arr = np.asarray(omega_h)
     except (TypeError, ValueError) as exc:
-        raise TypeError(f"omega_h: expected a real number or an array of them ({exc})") from None
+        raise _checks.type_error("omega_h", f"expected a real number or an array of them ({exc})") from None
     if arr.dtype == bool or not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
-        raise TypeError(f"omega_h: expected a real number or an array of them, got {arr.dtype} values")
+        raise _checks.type_error("omega_h", f"expected a real number or an array of them, got {arr.dtype} values")
     arr = arr.astype(float)
     if not np.all(np.isfinite(arr)):
-        raise ValueError("omega_h: must be finite, got NaN or Inf")
+        raise _checks.value_error("omega_h", "must be finite, got NaN or Inf")
     if np.any(arr <= 0.0):
-        raise ValueError(f"omega_h: must be > 0, got {arr[arr <= 0.0].flat[0]}")
+        raise _checks.value_error("omega_h", f"must be > 0, got {arr[arr <= 0.0].flat[0]}")
     bad = (arr < OMEGA_RANGE[0]) | (arr > OMEGA_RANGE[1])
     if np.any(bad):
-        raise ValueError(f"omega_h: must lie in [{OMEGA_RANGE[0]:g}, {OMEGA_RANGE[1]:g}], got {arr[bad].flat[0]:g}")
+        raise _checks.value_error("omega_h", f"must lie in [{OMEGA_RANGE[0]:g}, {OMEGA_RANGE[1]:g}], got {arr[bad].flat[0]:g}")
     return arr.reshape(-1), arr.shape
 
 
@@ -144,7 +145,7 @@ def amplification_matrix(scheme, omega_h: float, xi: float = 0.0) -> np.ndarray:
     Its size is 3 for CentralDifference, Newmark and GeneralizedAlpha, 4 for
     CEMDTS and Zhai, 3 + order + 1 for PreciseIntegration.
     """
-    _check_scheme(scheme)
+    check_scheme("scheme", scheme)
     om = _checks.real("omega_h", omega_h, positive=True)
     _omegas(om)
     return _matrix(scheme, om, _oscillator(_check_xi(xi)))
@@ -164,7 +165,7 @@ def spectral_radius(scheme, omega_h, xi: float = 0.0):
     squarings from Ω ≈ 3e6: its exponential overflows).
 
     ``omega_h`` may be an array (values in OMEGA_RANGE): the result then has its shape."""
-    _check_scheme(scheme)
+    check_scheme("scheme", scheme)
     xi = _check_xi(xi)
     oms, shape = _omegas(omega_h)
     model = _oscillator(xi)
@@ -230,7 +231,7 @@ def _track(scheme, oms: np.ndarray, xi: float, model: Model) -> np.ndarray:
 def principal_eigenvalue(scheme, omega_h, xi: float = 0.0):
     """The principal root λ with Im λ > 0 (its conjugate is the other one), NaN where
     the principal pair has become real. ``omega_h`` may be an array."""
-    _check_scheme(scheme)
+    check_scheme("scheme", scheme)
     xi = _check_xi(xi)
     oms, shape = _omegas(omega_h)
     uniq, back = np.unique(oms, return_inverse=True)
@@ -291,14 +292,14 @@ def critical_omega_h(scheme, xi: float = 0.0, *, omega_max: float = OMEGA_LIMIT,
     Where ρ leaves 1 like √(Ω - Ω_crit) (a pair splitting on the real axis) the offset
     this causes in Ω_crit is ~1e-12; where it leaves 1 linearly it is ~tol.
     """
-    _check_scheme(scheme)
+    check_scheme("scheme", scheme)
     xi = _check_xi(xi)
     omega_max = _checks.real("omega_max", omega_max, positive=True)
     omega_min = _checks.real("omega_min", omega_min, positive=True)
     if omega_max > OMEGA_RANGE[1]:
-        raise ValueError(f"omega_max: must be <= {OMEGA_RANGE[1]:g}, got {omega_max:g}")
+        raise _checks.value_error("omega_max", f"must be <= {OMEGA_RANGE[1]:g}, got {omega_max:g}")
     if not OMEGA_RANGE[0] <= omega_min < omega_max:
-        raise ValueError(f"omega_min: must lie in [{OMEGA_RANGE[0]:g}, omega_max = {omega_max:g}), got {omega_min:g}")
+        raise _checks.value_error("omega_min", f"must lie in [{OMEGA_RANGE[0]:g}, omega_max = {omega_max:g}), got {omega_min:g}")
     tol = _checks.real("tol", tol, positive=True)
     points_per_decade = _checks.integer("points_per_decade", points_per_decade, minimum=2)
     model = _oscillator(xi)
@@ -330,7 +331,7 @@ def critical_omega_h(scheme, xi: float = 0.0, *, omega_max: float = OMEGA_LIMIT,
 
 def scheme_label(scheme) -> str:
     """A short name for tables and legends (the equilibrium iteration left out: it changes nothing here)."""
-    _check_scheme(scheme)
+    check_scheme("scheme", scheme)
     return _labels.scheme_label(scheme, iteration=False)
 
 
@@ -345,13 +346,13 @@ def plot_spectral_radius(schemes, path: str, *, xi: float = 0.0, omega_h=None, l
 
     schemes = list(schemes)
     for s in schemes:
-        _check_scheme(s)
+        check_scheme("schemes", s)
     xi = _check_xi(xi)
     oms = np.geomspace(1e-2, 1e2, 300) if omega_h is None else _omegas(omega_h)[0]
     oms = np.sort(oms)
     labels = [scheme_label(s) for s in schemes] if labels is None else list(labels)
     if len(labels) != len(schemes):
-        raise ValueError(f"labels: expected {len(schemes)} labels, got {len(labels)}")
+        raise _checks.value_error("labels", f"expected {len(schemes)} labels, got {len(labels)}")
     if critical is None:
         critical = [critical_omega_h(s, xi, omega_max=max(OMEGA_LIMIT, float(oms[-1]))) for s in schemes]
 

@@ -58,10 +58,11 @@ import time
 
 import numpy as np
 
-from . import _checks, _core
-from ._labels import scheme_label
-from ._model import Model
-from ._solve import SCHEMES, solve
+from .. import _checks, _core
+from .._labels import scheme_label
+from .._model import Model
+from .._schemes import check_scheme
+from .._solve import solve
 from .reference import FirstOrder, Reference, scale_from_peaks, reference as _reference
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
@@ -88,7 +89,7 @@ def _dof_columns(model: Model, dofs) -> list[int]:
         dofs = [dofs]
     cols = [model._dof_index("dofs", d) for d in dofs]
     if not cols:
-        raise ValueError("dofs: give at least one DOF (or None for all)")
+        raise _checks.value_error("dofs", "give at least one DOF (or None for all)")
     return cols
 
 
@@ -96,7 +97,7 @@ def _t_end(model: Model, t_end) -> float:
     if t_end is None:
         t_end = (getattr(model, "scene", None) or {}).get("t_end")
         if t_end is None:
-            raise ValueError("t_end: the model has no scene t_end; give t_end")
+            raise _checks.value_error("t_end", "the model has no scene t_end; give t_end")
     t_end = _checks.real("t_end", t_end, positive=True)
     return t_end
 
@@ -105,9 +106,9 @@ def _get_reference(model: Model, t_end: float, ref) -> Reference:
     if ref is None:
         return _reference(model, t_end)
     if not isinstance(ref, Reference):
-        raise TypeError(f"reference: expected an nvib Reference (from nvib.reference), got {type(ref).__name__}")
+        raise _checks.type_error("reference", f"expected an nvib Reference (from nvib.reference), got {type(ref).__name__}")
     if ref.n != model.n or ref.t0 != 0.0 or ref.t_end < t_end * (1 - 1e-12):
-        raise ValueError(f"reference: covers [{ref.t0:g}, {ref.t_end:g}] for {ref.n} DOFs; the runs need "
+        raise _checks.value_error("reference", f"covers [{ref.t0:g}, {ref.t_end:g}] for {ref.n} DOFs; the runs need "
                          f"[0, {t_end:g}] for {model.n}")
     return ref
 
@@ -157,22 +158,21 @@ def cost(model: Model, schemes, dts, *, t_end: float | None = None, dofs=None, r
     for energy. progress : optional callable progress(done, total, row).
     See the module docstring for how each field is measured."""
     if not isinstance(model, Model):
-        raise TypeError(f"model: expected nvib.Model, got {type(model).__name__}")
+        raise _checks.type_error("model", f"expected nvib.Model, got {type(model).__name__}")
     schemes = list(schemes) if isinstance(schemes, (list, tuple)) else [schemes]
     if not schemes:
-        raise ValueError("schemes: give at least one scheme")
+        raise _checks.value_error("schemes", "give at least one scheme")
     for s in schemes:
-        if not isinstance(s, SCHEMES):
-            raise TypeError(f"schemes: expected nvib schemes, got {type(s).__name__}")
+        check_scheme("schemes", s)
     dts = [_checks.real("dts", dt, positive=True) for dt in np.atleast_1d(np.asarray(dts, dtype=float)).tolist()]
     if not dts:
-        raise ValueError("dts: give at least one step")
+        raise _checks.value_error("dts", "give at least one step")
     t_end = _t_end(model, t_end)
     cols = _dof_columns(model, dofs)
     repeats, long_run = _check_common(repeats, long_run)
     max_saved = _checks.integer("max_saved", max_saved, minimum=2)
     if progress is not None and not callable(progress):
-        raise TypeError("progress: expected a callable progress(done, total, row)")
+        raise _checks.type_error("progress", "expected a callable progress(done, total, row)")
     ref = _get_reference(model, t_end, reference)
     with_energy = bool(energy) and bool(model._core.accounts_energy)
     names = ",".join(model.dofs[c] for c in cols)
@@ -251,16 +251,16 @@ def cost_scipy(model: Model, methods=SCIPY_METHODS, rtols=SCIPY_RTOLS, *, t_end:
     from scipy.integrate import solve_ivp
 
     if not isinstance(model, Model):
-        raise TypeError(f"model: expected nvib.Model, got {type(model).__name__}")
+        raise _checks.type_error("model", f"expected nvib.Model, got {type(model).__name__}")
     methods = [methods] if isinstance(methods, str) else list(methods)
     known = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
     for m in methods:
         if m not in known:
-            raise ValueError(f"methods: unknown solve_ivp method {m!r} (known: {', '.join(known)})")
+            raise _checks.value_error("methods", f"unknown solve_ivp method {m!r} (known: {', '.join(known)})")
     rtols = sorted((_checks.real("rtols", r, positive=True) for r in np.atleast_1d(np.asarray(rtols, dtype=float))),
                    reverse=True)
     if not methods or not rtols:
-        raise ValueError("methods, rtols: give at least one of each")
+        raise _checks.value_error("methods, rtols", "give at least one of each")
     t_end = _t_end(model, t_end)
     cols = _dof_columns(model, dofs)
     repeats, long_run = _check_common(repeats, long_run)

@@ -48,13 +48,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _core
-from ._labels import scheme_label
-from ._scenes import load_scene
-from ._schemes import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration
-from ._solve import solve
-from .cost import _conservative, cost
-from .reference import reference
+from .. import _checks, _core
+from .._core import CEMDTS, CentralDifference, GeneralizedAlpha, Newmark, PreciseIntegration
+from .._labels import scheme_label
+from .._scenes import load_scene
+from .._solve import solve
+from ..analysis.cost import _conservative, cost
+from ..analysis.reference import reference
 
 # The hardening oscillator's smallest period by the paper's secant frequency sqrt(k0 (1 + a x0^2) / m)
 # = 82.76 rad/s (section 4.2: "the time step is 1/76 of the minimum natural period").
@@ -160,7 +160,7 @@ class Orbit:
                 break
             span *= 2.0
         else:
-            raise ValueError("model: no closed orbit found (the motion is not periodic)")
+            raise _checks.value_error("model", "no closed orbit found (the motion is not periodic)")
         u, v = reference(model, span)(np.linspace(0.0, span, ORBIT_SAMPLES))
         self.scale = np.array([np.max(np.abs(u)), np.max(np.abs(v))])
         from scipy.spatial import cKDTree
@@ -653,7 +653,7 @@ def write_paper(outdir: str, *, repeats: int = 3, cpu_repeats: int = 5, progress
                                ("eta_study", eta, ("problem", "variant", "eta") + RUN_FIELDS)):
         files[name + ".csv"] = os.path.join(outdir, name + ".csv")
         _write_csv(files[name + ".csv"], rows, fields)
-    from . import __version__
+    from .. import __version__
 
     meta = {"date": datetime.date.today().isoformat(), "machine": f"{platform.machine()}, {platform.system()}",
             "python": platform.python_version(), "version": __version__, "elapsed": time.perf_counter() - t0}

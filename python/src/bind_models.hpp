@@ -1,0 +1,221 @@
+// Models: the declared effects (Effect, and the laws they may use) and one
+// Model type holding either a C++-only model or one with Python callables.
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <string>
+#include <tuple>
+#include <variant>
+#include <vector>
+
+#include <nvib/nvib.hpp>
+
+#include "bind_schemes.hpp"
+#include "py_force.hpp"
+
+namespace nvib_py {
+
+namespace fx = nvib::effects;
+using nvib::Matrix;
+using nvib::Vector;
+using EffectModel = nvib::Model<fx::EffectSet>;
+using HybridModel = nvib::Model<fx::EffectsPlus<PyForce>>;
+using MassArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// A model: declared effects only (no Python in the loop: the GIL is released),
+// or with Python callables (the GIL is kept); its DOF names.
+struct PyModel {
+  std::variant<EffectModel, HybridModel> m;
+  std::vector<std::string> dofs;
+  bool python() const { return m.index() == 1; }
+  template <class F>
+  decltype(auto) visit(F&& f) {
+    return std::visit(std::forward<F>(f), m);
+  }
+  template <class F>
+  decltype(auto) visit(F&& f) const {
+    return std::visit(std::forward<F>(f), m);
+  }
+  const fx::EffectSet& effects() const {
+    return python() ? std::get<1>(m).nonlinear_force().effects() : std::get<0>(m).nonlinear_force();
+  }
+};
+
+inline nvib::Mass make_mass(const MassArray& m) {
+  if (m.ndim() == 1) return nvib::Mass::diagonal(Eigen::Map<const Vector>(m.data(), m.shape(0)));
+  if (m.ndim() == 2) {
+    Matrix M = Eigen::Map<const nvib::History>(m.data(), m.shape(0), m.shape(1));
+    if (M.rows() == M.cols()) {
+      Matrix off = M;
+      off.diagonal().setZero();
+      if (off.allFinite() && off.cwiseAbs().maxCoeff() == 0.0) return nvib::Mass::diagonal(M.diagonal());
+    }
+    return nvib::Mass::dense(M);
+  }
+  raise_value_error("mass", "expected a 1-D array (diagonal) or a 2-D matrix");
+}
+
+inline fx::Law parse_law(const std::string& s) {
+  for (int k = 0; k < static_cast<int>(fx::AllLaws::size); ++k)
+    if (s == fx::to_string(static_cast<fx::Law>(k))) return static_cast<fx::Law>(k);
+  raise_value_error("type", "unknown effect type '" + s + "'");
+}
+
+inline fx::Signal make_signal(const std::string& kind, double amplitude, double omega, double phase,
+                              std::vector<double> t, std::vector<double> values) {
+  if (kind == "none") return {};
+  if (kind == "sine") return fx::Signal::sine(amplitude, omega, phase);
+  if (kind == "table") return fx::Signal::table(std::move(t), std::move(values));
+  raise_value_error("signal.kind", "expected 'sine' or 'table', got '" + kind + "'");
+}
+
+// {type: {doc, parameters: [(name, default or None)], signal, signal_required, uses_velocity, is_load}}
+inline py::dict laws() {
+  py::dict out;
+  fx::AllLaws::for_each([&](auto L) {
+    using Lw = decltype(L);
+    py::list params;
+    for (const auto& p : Lw::parameters)
+      params.append(py::make_tuple(p.name, std::isnan(p.fallback) ? py::object(py::none()) : py::float_(p.fallback)));
+    py::dict d;
+    d["doc"] = Lw::doc;
+    d["parameters"] = params;
+    d["signal"] = Lw::signal ? py::object(py::str(Lw::signal)) : py::object(py::none());
+    d["signal_required"] = Lw::signal_required;
+    d["uses_velocity"] = Lw::uses_velocity;
+    d["is_load"] = Lw::is_load;
+    out[fx::to_string(Lw::id)] = d;
+  });
+  return out;
+}
+
+inline py::dict effect_parameters(const fx::Effect& e) {
+  py::dict d;
+  fx::dispatch(e.law, [&](auto L) {
+    using Lw = decltype(L);
+    for (size_t k = 0; k < Lw::parameters.size(); ++k) d[Lw::parameters[k].name] = e.values[k];
+  });
+  return d;
+}
+
+// laws: (index, coef, law, tangent or None, where, uses_velocity, uses_time) per scalar Python law.
+using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, py::object, std::string, bool, bool>;
+
+inline PyModel make_model(const MassArray& mass, std::vector<fx::Effect> list, const Matrix& K, const Matrix& C,
+                          std::vector<std::string> dofs, py::object force, py::object tangent, bool uses_velocity,
+                          bool uses_time, std::vector<LawSpec> laws) {
+  nvib::Mass ms = make_mass(mass);
+  if (static_cast<Index>(dofs.size()) != ms.size())
+    raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(dofs.size()));
+  if (force.is_none() && laws.empty())
+    return PyModel{fx::make_effect_model(std::move(ms), std::move(list), K, C), std::move(dofs)};
+  PyForce f;
+  f.force = std::move(force);
+  f.tangent_ = std::move(tangent);
+  f.n = ms.size();
+  f.velocity = uses_velocity;
+  f.time = uses_time;
+  for (auto& [index, coef, law, tan, where, vel, time] : laws) {
+    if (index.size() != coef.size() || index.empty())
+      raise_value_error(where + ".measure", "index and coef must be non-empty and equally long");
+    for (Index i : index)
+      if (i < 0 || i >= ms.size()) raise_value_error(where + ".measure", "DOF index " + std::to_string(i) + " is out of range");
+    f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time});
+  }
+  return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(f), K, C), std::move(dofs)};
+}
+
+inline void bind_models(py::module_& m) {
+  using fx::Effect;
+  m.def("laws", &laws, "the built-in effect types: their parameters, signal and flags");
+  py::class_<Effect>(m, "Effect", "One declared effect: a law on its measure d = g . u.")
+      .def(py::init([](const std::string& type, std::vector<Index> index, std::vector<double> coef,
+                       const py::dict& parameters, const std::string& name, const std::string& signal,
+                       double amplitude, double omega, double phase, std::vector<double> t, std::vector<double> values) {
+             if (index.size() != coef.size()) raise_value_error("measure", "index and coef lengths differ");
+             fx::Measure g;
+             for (size_t i = 0; i < index.size(); ++i) g.emplace_back(index[i], coef[i]);
+             std::vector<std::pair<std::string, double>> named;
+             for (auto item : parameters) {
+               const std::string key = item.first.cast<std::string>();
+               named.emplace_back(key, to_real(item.second, key));
+             }
+             return fx::make_effect(parse_law(type), std::move(g), named,
+                                    make_signal(signal, amplitude, omega, phase, std::move(t), std::move(values)), name);
+           }),
+           py::arg("type"), py::arg("index"), py::arg("coef"), py::arg("parameters") = py::dict(), py::kw_only(),
+           py::arg("name") = "", py::arg("signal") = "none", py::arg("amplitude") = 0.0, py::arg("omega") = 0.0,
+           py::arg("phase") = 0.0, py::arg("t") = std::vector<double>{}, py::arg("values") = std::vector<double>{})
+      .def_property_readonly("type", [](const Effect& e) { return fx::to_string(e.law); })
+      .def_readonly("name", &Effect::name)
+      .def_readonly("index", &Effect::index)
+      .def_readonly("coef", &Effect::coef)
+      .def_property_readonly("parameters", &effect_parameters, "the declared parameters by name")
+      .def_property_readonly("uses_velocity", &Effect::uses_velocity)
+      .def_property_readonly("uses_time", &Effect::uses_time)
+      .def_property_readonly("is_linear", &Effect::is_linear)
+      .def_property_readonly("is_load", &Effect::is_load)
+      .def("value", &Effect::value, py::arg("d"), py::arg("dd"), py::arg("t"), "the law f(d, d', t)")
+      .def("__repr__", [](const Effect& e) {
+        return std::string("Effect(") + fx::to_string(e.law) + (e.name.empty() ? "" : ", name='" + e.name + "'") + ")";
+      });
+
+  py::class_<PyModel>(m, "Model", "M a + K u + C v + F(u, v, t) = 0: a mass and the declared effects (C++ only), "
+                                  "optionally with Python callables (then the GIL is kept during runs).")
+      .def(py::init(&make_model), py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"), py::arg("dofs"),
+           py::arg("force") = py::none(), py::arg("tangent") = py::none(), py::arg("uses_velocity") = true,
+           py::arg("uses_time") = true, py::arg("laws") = std::vector<LawSpec>{})
+      .def_readonly("dofs", &PyModel::dofs)
+      .def_property_readonly("has_python", &PyModel::python, "the model calls Python (the GIL is kept)")
+      .def_property_readonly("size", [](const PyModel& p) { return p.visit([](auto& md) { return md.size(); }); })
+      .def_property_readonly("uses_velocity", [](const PyModel& p) { return p.visit([](auto& md) { return md.uses_velocity(); }); })
+      .def_property_readonly("uses_time", [](const PyModel& p) { return p.visit([](auto& md) { return md.uses_time(); }); })
+      .def_property_readonly("is_linear", [](const PyModel& p) { return p.visit([](auto& md) { return md.is_linear(); }); })
+      .def_property_readonly("accounts_energy",
+                             [](const PyModel& p) { return p.visit([](auto& md) { return md.accounts_energy(); }); })
+      .def_property_readonly("num_evaluated_effects", [](const PyModel& p) { return p.effects().evaluated().size(); })
+      .def_property_readonly("effects", [](const PyModel& p) { return p.effects().effects(); })
+      .def_property_readonly("mass_matrix", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().matrix(); }); })
+      .def_property_readonly("K", [](const PyModel& p) {
+        return p.visit([](auto& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); });
+      })
+      .def_property_readonly("C", [](const PyModel& p) {
+        return p.visit([](auto& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); });
+      })
+      .def("potential", [](PyModel& p, const Vector& u, double t) { return p.visit([&](auto& md) { return md.potential(u, t); }); },
+           py::arg("u"), py::arg("t") = 0.0)
+      .def("kinetic", [](PyModel& p, const Vector& v) { return p.visit([&](auto& md) { return md.kinetic(v); }); },
+           py::arg("v"))
+      .def("force",
+           [](PyModel& p, const Vector& u, const Vector& v, double t) {
+             return p.visit([&](auto& md) {
+               nvib::Stats st;
+               Vector out(md.size());
+               md.force(u, v, t, out, st);
+               return out;
+             });
+           },
+           py::arg("u"), py::arg("v"), py::arg("t"), "K u + C v + F(u, v, t)")
+      .def("tangent",
+           [](PyModel& p, const Vector& u, const Vector& v, double t) {
+             return p.visit([&](auto& md) {
+               nvib::Stats st;
+               Matrix K(md.size(), md.size()), C(md.size(), md.size());
+               md.tangent(u, v, t, K, C, st);
+               return py::make_tuple(K, C);
+             });
+           },
+           py::arg("u"), py::arg("v"), py::arg("t"), "(K_t, C_t)")
+      .def("static_equilibrium",
+           [](PyModel& p, double t, const Vector& guess, double rtol, int max_iter) {
+             return p.visit([&](auto& md) { return nvib::static_equilibrium(md, t, guess, rtol, max_iter); });
+           },
+           py::arg("t"), py::arg("u_guess"), py::arg("rtol"), py::arg("max_iter"),
+           "u with K u + F(u, 0, t) = 0, by the Newton component");
+}
+
+}  // namespace nvib_py

@@ -1,0 +1,250 @@
+// Runs: the C++ solve() and a type-erased Stepper (one thread at a time), and
+// the Result they return, whose histories NumPy reads without a copy.
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+
+#include "bind_models.hpp"
+#include "bind_result.hpp"
+
+namespace nvib_py {
+
+using nvib::Failure;
+using nvib::SolveOptions;
+using nvib::Status;
+
+// Called every few thousand steps: lets Ctrl-C through and reports progress.
+// Taking the GIL back costs up to the interpreter's switch interval when
+// another Python thread is busy, so after the first call it is done at most every 0.1 s.
+struct PyObserver {
+  py::object callback;
+  bool gil_released;
+  bool first = true;
+  std::chrono::steady_clock::time_point last{};
+
+  void operator()(std::int64_t i, std::int64_t n) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!first && now - last < std::chrono::milliseconds(100)) return;
+    first = false;
+    last = now;
+    auto body = [&]() {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      if (!callback.is_none()) callback(i, n);
+    };
+    if (gil_released) {
+      py::gil_scoped_acquire gil;
+      body();
+    } else {
+      body();
+    }
+  }
+};
+
+// Runs f with the GIL released when the model calls no Python.
+template <class F>
+auto maybe_without_gil(bool python, F&& f) {
+  if (python) return f();
+  py::gil_scoped_release nogil;
+  return f();
+}
+
+struct AnyStepper {
+  virtual ~AnyStepper() = default;
+  virtual void initialize(double t0, const Vector& u0, const Vector& v0) = 0;
+  virtual Status step(Failure& failure) = 0;
+  virtual double time() const = 0;
+  virtual std::int64_t step_index() const = 0;
+  virtual double dt() const = 0;
+  virtual const Vector& u() const = 0;
+  virtual const Vector& v() const = 0;
+  virtual const Vector& a() const = 0;
+  virtual nvib::Stats stats() const = 0;
+  virtual Failure failure() const = 0;
+  virtual std::vector<double> last_residuals() const = 0;
+  virtual double accepted_residual() const = 0;
+  virtual nvib::Result integrate(double t_end, const SolveOptions& opt, py::object observer) = 0;
+  virtual Vector state() const = 0;
+  virtual void set_state(double t, const Vector& x) = 0;
+
+  py::object scheme;
+  std::vector<std::string> dofs;
+  std::atomic<bool> busy{false};
+};
+
+// Holds the stepper for one thread; a second thread gets a RuntimeError instead of a corrupted state.
+struct Exclusive {
+  AnyStepper& s;
+  explicit Exclusive(AnyStepper& st) : s(st) {
+    if (s.busy.exchange(true))
+      throw std::runtime_error("Stepper: used from two threads at once; a Stepper is not thread-safe (give each "
+                               "thread its own, or serialise the calls)");
+  }
+  ~Exclusive() { s.busy = false; }
+};
+
+template <class S>
+struct StepperImpl final : AnyStepper {
+  template <class Scheme, class M>
+  StepperImpl(const Scheme& sc, const M& model, double dt) : s(sc, model, dt) {}
+  static constexpr bool python = std::is_same_v<std::decay_t<decltype(std::declval<S&>().model())>, HybridModel>;
+
+  void initialize(double t0, const Vector& u0, const Vector& v0) override {
+    maybe_without_gil(python, [&] { return (s.initialize(t0, u0, v0), 0); });
+  }
+  Status step(Failure& failure) override { return nvib::checked_step(s, failure); }
+  double time() const override { return s.time(); }
+  std::int64_t step_index() const override { return s.step_index(); }
+  double dt() const override { return s.dt(); }
+  const Vector& u() const override { return s.u(); }
+  const Vector& v() const override { return s.v(); }
+  const Vector& a() const override { return s.a(); }
+  nvib::Stats stats() const override { return s.stats(); }
+  Failure failure() const override { return s.failure(); }
+  std::vector<double> last_residuals() const override {
+    if constexpr (has_residuals<S>::value) return s.last_residuals();
+    return {};
+  }
+  double accepted_residual() const override {
+    if constexpr (nvib::has_accepted_residual<S>::value) return s.accepted_residual();
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  Vector state() const override { return s.state(); }
+  void set_state(double t, const Vector& x) override { s.set_state(t, x); }
+  nvib::Result integrate(double t_end, const SolveOptions& opt, py::object observer) override {
+    PyObserver obs{std::move(observer), !python};
+    return maybe_without_gil(python, [&] { return nvib::integrate(s, t_end, opt, obs); });
+  }
+
+  template <class T, class = void>
+  struct has_residuals : std::false_type {};
+  template <class T>
+  struct has_residuals<T, std::void_t<decltype(std::declval<const T&>().last_residuals())>> : std::true_type {};
+  S s;
+};
+
+inline std::unique_ptr<AnyStepper> make_stepper(PyModel& model, py::object scheme, double dt) {
+  std::unique_ptr<AnyStepper> out;
+  with_scheme(scheme, "scheme", [&](const auto& sc) {
+    using Scheme = std::decay_t<decltype(sc)>;
+    model.visit([&](auto& md) {
+      using M = std::decay_t<decltype(md)>;
+      out = std::make_unique<StepperImpl<typename Scheme::template stepper<M>>>(sc, md, dt);
+    });
+    return py::none();
+  });
+  out->scheme = scheme;
+  out->dofs = model.dofs;
+  return out;
+}
+
+inline SolveOptions solve_options(std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
+                                  bool energy, double max_energy_error) {
+  SolveOptions opt;
+  opt.save_every = save_every;
+  opt.dofs = std::move(dofs);
+  opt.max_displacement = max_displacement;
+  opt.energy = energy;
+  opt.max_energy_error = max_energy_error;
+  opt.throw_on_failure = false;
+  return opt;
+}
+
+inline void bind_run(py::module_& m) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  m.attr("DEFAULT_MAX_ENERGY_ERROR") = nvib::kDefaultMaxEnergyError;
+  m.def(
+      "solve",
+      [](PyModel& model, py::object scheme, double dt, double t_end, double t0, const Vector& u0, const Vector& v0,
+         std::int64_t save_every, std::vector<Index> dofs, double max_displacement, bool energy,
+         double max_energy_error, py::object progress) {
+        SolveOptions opt = solve_options(save_every, std::move(dofs), max_displacement, energy, max_energy_error);
+        opt.t0 = t0;
+        auto result = std::make_unique<PyResult>();
+        with_scheme(scheme, "scheme", [&](const auto& sc) {
+          model.visit([&](auto& md) {
+            PyObserver obs{progress, !model.python()};
+            result->r = maybe_without_gil(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
+          });
+          return py::none();
+        });
+        result->scheme = scheme;
+        result->dt = dt;
+        for (Index d : result->r.dofs) result->dof_names.push_back(model.dofs[static_cast<size_t>(d)]);
+        return result;
+      },
+      py::arg("model"), py::arg("scheme"), py::arg("dt"), py::arg("t_end"), py::arg("t0"), py::arg("u0"),
+      py::arg("v0"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
+      py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
+      py::arg("progress") = py::none(),
+      "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end; NaN limits mean the defaults.");
+
+  py::class_<AnyStepper>(m, "Stepper", "Step-by-step integration; one thread at a time.")
+      .def(py::init(&make_stepper), py::arg("model"), py::arg("scheme"), py::arg("dt"))
+      .def("initialize",
+           [](AnyStepper& s, double t0, const Vector& u0, const Vector& v0) {
+             Exclusive x(s);
+             s.initialize(t0, u0, v0);
+           },
+           py::arg("t0"), py::arg("u0"), py::arg("v0"))
+      .def("step",
+           [](AnyStepper& s) {
+             Exclusive x(s);
+             Failure f;
+             const Status st = s.step(f);
+             return py::make_tuple(st, st == Status::success ? py::object(py::none()) : py::cast(f));
+           },
+           "one step with the divergence test: (status, failure or None)")
+      .def_property_readonly("t", [](AnyStepper& s) { return (Exclusive(s), s.time()); })
+      .def_property_readonly("step_index", [](AnyStepper& s) { return (Exclusive(s), s.step_index()); })
+      .def_property_readonly("dt", &AnyStepper::dt)
+      .def_property_readonly("u", [](AnyStepper& s) { return (Exclusive(s), Vector(s.u())); })
+      .def_property_readonly("v", [](AnyStepper& s) { return (Exclusive(s), Vector(s.v())); })
+      .def_property_readonly("a", [](AnyStepper& s) { return (Exclusive(s), Vector(s.a())); })
+      .def_property_readonly("stats", [](AnyStepper& s) { return (Exclusive(s), s.stats()); })
+      .def_property_readonly("failure", [](AnyStepper& s) { return (Exclusive(s), s.failure()); })
+      .def_property_readonly("last_residuals", [](AnyStepper& s) { return (Exclusive(s), s.last_residuals()); })
+      .def_property_readonly("accepted_residual", [](AnyStepper& s) {
+        Exclusive x(s);
+        const double r = s.accepted_residual();
+        return std::isnan(r) ? py::object(py::none()) : py::object(py::float_(r));
+      })
+      .def("state", [](AnyStepper& s) { return (Exclusive(s), s.state()); }, "the carried state [u; v; a; history...]")
+      .def("set_state",
+           [](AnyStepper& s, double t, const Vector& x) {
+             Exclusive g(s);
+             s.set_state(t, x);
+           },
+           py::arg("t"), py::arg("x"))
+      .def(
+          "integrate",
+          [](AnyStepper& s, double t_end, std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
+             bool energy, double max_energy_error, py::object progress) {
+            Exclusive x(s);
+            auto result = std::make_unique<PyResult>();
+            result->r = s.integrate(t_end, solve_options(save_every, std::move(dofs), max_displacement, energy,
+                                                         max_energy_error),
+                                    std::move(progress));
+            result->scheme = s.scheme;
+            result->dt = s.dt();
+            for (Index d : result->r.dofs) result->dof_names.push_back(s.dofs[static_cast<size_t>(d)]);
+            return result;
+          },
+          py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
+          py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
+          py::arg("progress") = py::none());
+
+  m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,
+        "Matrix exponential by the 2^N algorithm of the precise integration method.");
+  m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"));
+  m.def("default_max_displacement", &nvib::default_max_displacement, py::arg("u"), py::arg("v"), py::arg("duration"));
+}
+
+}  // namespace nvib_py

@@ -1,0 +1,107 @@
+// The small bound types: argument errors (with .argument), Stats, Status, Failure.
+#pragma once
+
+#include <pybind11/native_enum.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <string>
+
+#include <nvib/nvib.hpp>
+
+namespace nvib_py {
+
+namespace py = pybind11;
+
+// Sets the Python error `type_name` of nvib._core (ArgumentError or
+// ArgumentTypeError) with its message and .argument.
+inline void set_argument_error(const char* type_name, const std::string& argument, const std::string& message) {
+  py::object cls = py::module_::import("nvib._core").attr(type_name);
+  py::object exc = cls(message);
+  exc.attr("argument") = argument;
+  PyErr_SetObject(cls.ptr(), exc.ptr());
+}
+// Raises ArgumentTypeError: "<argument>: <what>".
+[[noreturn]] inline void raise_type_error(const std::string& argument, const std::string& what) {
+  set_argument_error("ArgumentTypeError", argument, argument + ": " + what);
+  throw py::error_already_set();
+}
+// Raises ArgumentError (a ValueError): "<argument>: <what>".
+[[noreturn]] inline void raise_value_error(const std::string& argument, const std::string& what) {
+  set_argument_error("ArgumentError", argument, argument + ": " + what);
+  throw py::error_already_set();
+}
+
+inline py::dict stats_dict(const nvib::Stats& s) {
+  py::dict d;
+  d["num_steps"] = s.num_steps;
+  d["num_force_evals"] = s.num_force_evals;
+  d["num_fd_force_evals"] = s.num_fd_force_evals;
+  d["num_tangent_evals"] = s.num_tangent_evals;
+  d["num_newton_iters"] = s.num_newton_iters;
+  d["num_factorizations"] = s.num_factorizations;
+  d["num_linear_solves"] = s.num_linear_solves;
+  d["num_expm"] = s.num_expm;
+  d["wall_time"] = s.wall_time;
+  return d;
+}
+
+inline void bind_types(py::module_& m) {
+  using nvib::Failure;
+  using nvib::Stats;
+  using nvib::Status;
+  for (auto [name, base, doc] :
+       {std::tuple{"ArgumentError", PyExc_ValueError, "A bad argument (a ValueError); .argument names it."},
+        std::tuple{"ArgumentTypeError", PyExc_TypeError, "An argument of the wrong type (a TypeError); .argument names it."}}) {
+    py::object cls = py::reinterpret_steal<py::object>(
+        PyErr_NewExceptionWithDoc((std::string("nvib._core.") + name).c_str(), doc, base, nullptr));
+    cls.attr("argument") = py::none();
+    m.attr(name) = cls;
+  }
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const nvib::ArgumentError& e) {
+      set_argument_error("ArgumentError", e.argument(), e.what());
+    }
+  });
+
+  py::native_enum<Status>(m, "Status", "enum.Enum",
+                          "How a run ended: success, diverged (non-finite or unbounded state, or energy created), "
+                          "newton_failed (the equilibrium iteration did not converge) or singular_matrix.")
+      .value("success", Status::success)
+      .value("diverged", Status::diverged)
+      .value("newton_failed", Status::newton_failed)
+      .value("singular_matrix", Status::singular_matrix)
+      .finalize();
+
+  py::class_<Stats>(m, "Stats", "Counters summed over a run (never reset per step).")
+      .def(py::init<>())
+      .def_readonly("num_steps", &Stats::num_steps)
+      .def_readonly("num_force_evals", &Stats::num_force_evals, "evaluations of F(u, v, t) asked for by the scheme")
+      .def_readonly("num_fd_force_evals", &Stats::num_fd_force_evals, "extra evaluations of finite-difference tangents")
+      .def_readonly("num_tangent_evals", &Stats::num_tangent_evals)
+      .def_readonly("num_newton_iters", &Stats::num_newton_iters)
+      .def_readonly("num_factorizations", &Stats::num_factorizations)
+      .def_readonly("num_linear_solves", &Stats::num_linear_solves)
+      .def_readonly("num_expm", &Stats::num_expm)
+      .def_readonly("wall_time", &Stats::wall_time, "seconds")
+      .def("as_dict", &stats_dict)
+      .def("__repr__", [](const Stats& s) {
+        std::string out;
+        for (auto item : stats_dict(s))
+          out += (out.empty() ? "" : ", ") + std::string(py::str(item.first)) + "=" + std::string(py::repr(item.second));
+        return "Stats(" + out + ")";
+      });
+
+  py::class_<Failure>(m, "Failure", "Where and why a run stopped early.")
+      .def_readonly("status", &Failure::status)
+      .def_readonly("step", &Failure::step, "index of the step that failed (1 = the first step)")
+      .def_readonly("t", &Failure::t, "time the failed step was heading for")
+      .def_readonly("dof", &Failure::dof, "offending DOF for divergence, -1 if not applicable")
+      .def_readonly("residuals", &Failure::residuals, "Newton residual norms of the failed step")
+      .def_readonly("message", &Failure::message)
+      .def("__repr__", [](const Failure& f) { return "Failure(" + std::string(py::repr(py::str(f.message))) + ")"; });
+}
+
+}  // namespace nvib_py

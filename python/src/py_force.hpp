@@ -1,0 +1,176 @@
+// The Python adapters of nvib._core: a force given as Python callables
+// (a vector force(u, v, t) with an optional tangent, and scalar laws on
+// measures), as a force functor for Model. Every error names the callback.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <nvib/nvib.hpp>
+
+namespace nvib_py {
+
+namespace py = pybind11;
+using nvib::CVecRef;
+using nvib::Index;
+using nvib::MatRef;
+using nvib::VecRef;
+namespace detail = nvib::detail;
+
+inline py::array_t<double> to_numpy(const CVecRef& x) {
+  py::array_t<double> a(x.size());
+  std::memcpy(a.mutable_data(), x.data(), sizeof(double) * static_cast<size_t>(x.size()));
+  return a;
+}
+
+inline std::string shape_of(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s += (i ? ", " : "") + std::to_string(a.shape(i));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// Checks and converts what a callback returned; errors name the callback.
+inline py::array_t<double> checked_array(const py::handle& obj, const char* who, Index n, int ndim, double t) {
+  if (obj.is_none()) throw py::type_error(std::string(who) + " returned None at t = " + detail::fmt(t));
+  py::array arr = py::array::ensure(obj);
+  if (!arr) throw py::type_error(std::string(who) + " must return an array of floats, got " +
+                                 std::string(py::str(py::type::of(obj).attr("__name__"))));
+  const char kind = arr.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw py::type_error(std::string(who) + " must return real numbers, got dtype " +
+                         std::string(py::str(arr.dtype())) + " at t = " + detail::fmt(t));
+  const bool scalar_ok = ndim == 1 && n == 1 && arr.ndim() == 0;
+  bool shape_ok = arr.ndim() == ndim;
+  for (int i = 0; shape_ok && i < ndim; ++i) shape_ok = arr.shape(i) == n;
+  if (!shape_ok && !scalar_ok)
+    throw py::value_error(std::string(who) + " returned shape " + shape_of(arr) + ", expected " +
+                          (ndim == 1 ? "(" + std::to_string(n) + ",)"
+                                     : "(" + std::to_string(n) + ", " + std::to_string(n) + ")") +
+                          " at t = " + detail::fmt(t));
+  return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(arr);
+}
+
+// A scalar law given as a Python callable on a measure d = g . u:
+// law(d, d', t) -> f, acting as g^T f; tangent(d, d', t) -> (df/dd, df/dd') optional.
+struct PyLaw {
+  std::vector<Index> index;
+  std::vector<double> coef;
+  py::object law, tangent = py::none();
+  std::string where;  // "effects[3]", for error messages
+  bool velocity = true, time = true;
+
+  double measure(const CVecRef& x) const {
+    double d = 0.0;
+    for (size_t k = 0; k < index.size(); ++k) d += coef[k] * x[index[k]];
+    return d;
+  }
+};
+
+// A real number returned by a callback (a Python number or a 0-d/1-element array).
+inline double checked_scalar(const py::handle& obj, const std::string& who, double t) {
+  auto arr = checked_array(obj, who.c_str(), 1, 1, t);
+  return arr.data()[0];
+}
+
+// All Python callables of a model: a vector force(u, v, t) and scalar laws on measures.
+struct PyForce {
+  py::object force = py::none();    // force(u, v, t) -> (n,) or None
+  py::object tangent_ = py::none();  // tangent(u, v, t) -> (K, C)
+  std::vector<PyLaw> laws;
+  Index n = 0;
+  bool velocity = true, time = true;  // of `force`
+
+  bool empty() const { return force.is_none() && laws.empty(); }
+
+  void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
+    if (force.is_none()) {
+      out.setZero();
+    } else {
+      py::object r = force(to_numpy(u), to_numpy(v), t);
+      auto arr = checked_array(r, "force", n, 1, t);
+      std::memcpy(out.data(), arr.data(), sizeof(double) * static_cast<size_t>(n));
+      if (!out.allFinite()) nonfinite(u, v, t, "force");
+    }
+    for (const PyLaw& l : laws) {
+      const double d = l.measure(u), dd = l.velocity ? l.measure(v) : 0.0;
+      const double f = checked_scalar(l.law(d, dd, t), l.where + ".law", t);
+      if (!std::isfinite(f)) nonfinite(u, v, t, l.where + ".law");
+      for (size_t k = 0; k < l.index.size(); ++k) out[l.index[k]] += l.coef[k] * f;
+    }
+  }
+  // Overflow of a diverging run is reported as divergence by the solver; a
+  // non-finite value at a moderate state is a bug in the callback.
+  static void nonfinite(const CVecRef& u, const CVecRef& v, double t, const std::string& who) {
+    const double scale = std::max(u.cwiseAbs().maxCoeff(), v.cwiseAbs().maxCoeff());
+    if (u.allFinite() && v.allFinite() && scale < 1e30)
+      throw py::value_error(who + " returned a non-finite value at t = " + detail::fmt(t) +
+                            " for a finite state (max |u|, |v| = " + detail::fmt(scale) + ")");
+  }
+  bool has_tangent() const {
+    if (!force.is_none() && tangent_.is_none()) return false;
+    for (const PyLaw& l : laws)
+      if (l.tangent.is_none()) return false;
+    return true;
+  }
+  void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
+    K.setZero();
+    C.setZero();
+    if (!force.is_none()) force_tangent(u, v, t, K, C);
+    for (const PyLaw& l : laws) {
+      const double d = l.measure(u), dd = l.velocity ? l.measure(v) : 0.0;
+      py::object r = l.tangent(d, dd, t);
+      py::tuple kc = as_pair(r, l.where + ".tangent");
+      const double kd = checked_scalar(kc[0], l.where + ".tangent (df/dd)", t);
+      const double cd = kc[1].is_none() ? 0.0 : checked_scalar(kc[1], l.where + ".tangent (df/dd')", t);
+      if (!std::isfinite(kd) || !std::isfinite(cd))
+        throw py::value_error(l.where + ".tangent returned non-finite values at t = " + detail::fmt(t));
+      for (size_t i = 0; i < l.index.size(); ++i)
+        for (size_t j = 0; j < l.index.size(); ++j) {
+          K(l.index[i], l.index[j]) += kd * l.coef[i] * l.coef[j];
+          C(l.index[i], l.index[j]) += cd * l.coef[i] * l.coef[j];
+        }
+    }
+  }
+  static py::tuple as_pair(const py::object& r, const std::string& who) {
+    if (!py::isinstance<py::tuple>(r) && !py::isinstance<py::list>(r))
+      throw py::type_error(who + " must return a tuple (K, C), got " +
+                           std::string(py::str(py::type::of(r).attr("__name__"))));
+    py::tuple kc(r);
+    if (kc.size() != 2) throw py::type_error(who + " must return a tuple (K, C) of length 2");
+    return kc;
+  }
+  void force_tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
+    py::tuple kc = as_pair(tangent_(to_numpy(u), to_numpy(v), t), "tangent");
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    auto Ka = checked_array(kc[0], "tangent (K)", n, 2, t);
+    K = Eigen::Map<const RowMajor>(Ka.data(), n, n);
+    if (!kc[1].is_none()) {
+      auto Ca = checked_array(kc[1], "tangent (C)", n, 2, t);
+      C = Eigen::Map<const RowMajor>(Ca.data(), n, n);
+    }
+    if (!K.allFinite() || !C.allFinite())
+      throw py::value_error("tangent returned non-finite values at t = " + detail::fmt(t));
+  }
+  bool uses_velocity() const {
+    bool any = !force.is_none() && velocity;
+    for (const PyLaw& l : laws) any = any || l.velocity;
+    return any;
+  }
+  bool uses_time() const {
+    bool any = !force.is_none() && time;
+    for (const PyLaw& l : laws) any = any || l.time;
+    return any;
+  }
+  bool is_linear() const { return empty(); }
+  // Energy: the energy of a user callable is unknown.
+  bool accounts_energy() const { return empty(); }
+  double potential(const CVecRef&, double) const { return 0.0; }
+  double input_power(const CVecRef&, const CVecRef&, double) const { return 0.0; }
+  double dissipated_power(const CVecRef&) const { return 0.0; }
+};
+
+}  // namespace nvib_py
