@@ -17,8 +17,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include <nvib/effects/effects.hpp>
-#include <nvib/solve.hpp>
+#include <nvib/nvib.hpp>
 
 #include "bench_args.hpp"
 

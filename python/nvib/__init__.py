@@ -19,6 +19,7 @@ import os
 
 from . import _schemes
 from ._core import DEFAULT_MAX_ENERGY_ERROR
+from ._io import save_result
 from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, DivergenceError, NvibError,
                       SingularMatrixError)
 from ._labels import scheme_label
@@ -39,7 +40,7 @@ __all__ = sorted([
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
-    "plot_work_precision", "reference", "scene_names", "scheme_label", "schemes", "solve", "stability",
+    "plot_work_precision", "reference", "save_result", "scene_names", "scheme_label", "schemes", "solve", "stability",
     "time_at_error",
 ] + [cls.__name__ for cls in _schemes.scheme_classes()])
 

@@ -31,7 +31,7 @@ def real(name: str, x, *, positive: bool = False) -> float:
     try:
         x = float(x)
     except OverflowError:  # an integer too large for a double
-        raise value_error(name, f"must be finite, got an integer too large for a double") from None
+        raise value_error(name, "must be finite, got an integer too large for a double") from None
     if not math.isfinite(x):
         raise value_error(name, f"must be finite, got {x}")
     if positive and x <= 0.0:
@@ -72,7 +72,7 @@ def vector(name: str, x, n: int) -> np.ndarray:
     if a.shape != (n,):
         raise value_error(name, f"expected shape ({n},), got {a.shape}")
     if not np.all(np.isfinite(a)):
-        raise value_error(name, f"contains NaN or Inf")
+        raise value_error(name, "contains NaN or Inf")
     return np.ascontiguousarray(a)
 
 
@@ -83,5 +83,5 @@ def matrix(name: str, x, n: int) -> np.ndarray:
     if a.shape != (n, n):
         raise value_error(name, f"expected shape ({n}, {n}), got {a.shape}")
     if not np.all(np.isfinite(a)):
-        raise value_error(name, f"contains NaN or Inf")
+        raise value_error(name, "contains NaN or Inf")
     return np.ascontiguousarray(a)

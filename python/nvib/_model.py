@@ -45,7 +45,7 @@ def _signal(where: str, spec) -> dict:
             raise _checks.value_error(f"{where}.{key}", f"unknown key for a {kind} signal (expected {', '.join(required + tuple(optional))})")
     for key in required:
         if key not in spec:
-            raise _checks.value_error(f"{where}.{key}", f"missing")
+            raise _checks.value_error(f"{where}.{key}", "missing")
     out = {"signal": kind}
     if kind == "sine":
         out["amplitude"] = _checks.real(f"{where}.amplitude", spec["amplitude"])
@@ -55,13 +55,13 @@ def _signal(where: str, spec) -> dict:
         t = _checks.real_array(f"{where}.t", spec["t"])
         y = _checks.real_array(f"{where}.values", spec["values"])
         if t.ndim != 1 or t.size < 2:
-            raise _checks.value_error(f"{where}.t", f"expected a list of at least two times")
+            raise _checks.value_error(f"{where}.t", "expected a list of at least two times")
         if y.shape != t.shape:
             raise _checks.value_error(f"{where}.values", f"expected {t.size} values (as many as t), got {y.size}")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
-            raise _checks.value_error(where, f"the table contains NaN or Inf")
+            raise _checks.value_error(where, "the table contains NaN or Inf")
         if np.any(np.diff(t) <= 0):
-            raise _checks.value_error(f"{where}.t", f"times must increase strictly")
+            raise _checks.value_error(f"{where}.t", "times must increase strictly")
         out["t"], out["values"] = t.tolist(), y.tolist()
     return out
 
@@ -170,7 +170,7 @@ class Model:
                             f"got {type(tangent).__name__}")
         measure = spec.get("measure")
         if not isinstance(measure, dict) or not measure:
-            raise _checks.value_error(f"{where}.measure", f"expected a non-empty mapping DOF -> coefficient")
+            raise _checks.value_error(f"{where}.measure", "expected a non-empty mapping DOF -> coefficient")
         index = [self._dof_index(f"{where}.measure", k) for k in measure]
         coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
         flags = []
@@ -181,7 +181,7 @@ class Model:
             flags.append(value)
         name = spec.get("name", "")
         if not isinstance(name, str):
-            raise _checks.type_error(f"{where}.name", f"expected a string")
+            raise _checks.type_error(f"{where}.name", "expected a string")
         return (index, coef, law, tangent, where, *flags)
 
     def _dof_index(self, where: str, key) -> int:
@@ -204,11 +204,11 @@ class Model:
         if "measure" in spec:
             measure = spec["measure"]
             if not isinstance(measure, dict) or not measure:
-                raise _checks.value_error(f"{where}.measure", f"expected a non-empty mapping DOF -> coefficient")
+                raise _checks.value_error(f"{where}.measure", "expected a non-empty mapping DOF -> coefficient")
         elif kind == "ground_acceleration":
             measure = {d: 1.0 for d in self.dofs}  # every DOF moves with the ground
         else:
-            raise _checks.value_error(f"{where}.measure", f"missing")
+            raise _checks.value_error(f"{where}.measure", "missing")
         index = [self._dof_index(f"{where}.measure", k) for k in measure]
         coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
         required, optional = EFFECT_PARAMETERS[kind]
@@ -229,7 +229,7 @@ class Model:
                 params[key] = _checks.real(f"{where}.{key}", spec[key])
         name = spec.get("name", "")
         if not isinstance(name, str):
-            raise _checks.type_error(f"{where}.name", f"expected a string")
+            raise _checks.type_error(f"{where}.name", "expected a string")
         try:
             return _core.Effect(kind, index, coef, params, name=name, **signal)
         except ArgumentError as exc:  # names the parameter: make it effects[i].<parameter>

@@ -9,6 +9,7 @@ import sys
 import numpy as np
 
 from . import _checks
+from ._core import ArgumentError
 from ._model import Model
 
 if sys.version_info >= (3, 11):
@@ -21,8 +22,13 @@ _SCENE_KEYS = {"name", "title", "source", "t_end", "dt", "plot_dof"}
 _TOP_KEYS = {"scene", "dofs", "initial", "effect"}
 
 
-class SceneError(ValueError):
-    """A scene file is malformed: the message names the file and the key."""
+class SceneError(ArgumentError):
+    """A scene file is malformed or missing: the message names the file and the key; ``.argument`` is "scene"."""
+
+    def __init__(self, message: str, key: str | None = None):
+        super().__init__(message)
+        self.argument = "scene"
+        self.key = key  # the scene's table or key at fault, when known ("initial")
 
 
 def scene_names() -> list[str]:
@@ -44,8 +50,11 @@ def scene_path(name_or_path: str) -> str:
 def load_scene(name_or_path: str, *, without=()) -> Model:
     """Build the Model a scene declares; ``without`` leaves out effects by name or type.
 
-    The returned model carries the scene's settings in ``model.scene``
-    (name, title, source, dt, t_end, plot_dof, path).
+    The returned model carries the scene's settings in ``model.scene`` (name,
+    title, source, dt, t_end, plot_dof, path, initial_u, notes). A scene that
+    starts from its static equilibrium may have none once effects are left
+    out (a vehicle without its wheel-rail contact): it then starts from the
+    full scene's equilibrium, and ``model.scene["notes"]`` says so.
     """
     path = scene_path(str(name_or_path))
     try:
@@ -53,7 +62,33 @@ def load_scene(name_or_path: str, *, without=()) -> Model:
             data = tomllib.load(fh)
     except tomllib.TOMLDecodeError as exc:
         raise SceneError(f"{path}: malformed TOML: {exc}") from None
-    return scene_from_dict(data, path=path, without=without)
+    without = (without,) if isinstance(without, str) else tuple(without)
+    if not without:
+        return scene_from_dict(data, path=path)
+    full = scene_from_dict(data, path=path)
+    names = sorted({e.name for e in full.effects if e.name})
+    types = sorted({e.type for e in full.effects})
+    for w in without:
+        if w not in names and w not in types:
+            raise _checks.value_error("without", f"no effect named or typed {w!r} in scene {full.scene['name']!r} "
+                                                 f"(names: {', '.join(names) or '-'}; types: {', '.join(types) or '-'})")
+    notes = []
+    try:
+        model = scene_from_dict(data, path=path, without=without)
+    except SceneError as exc:
+        if exc.key != "initial":
+            raise
+        # Without e.g. the wheel-rail contact a vehicle has no equilibrium to rest in:
+        # start from the full scene's equilibrium instead (same initial state, fewer forces).
+        data = dict(data, initial=dict(data.get("initial", {}), u=[float(x) for x in full.u0]))
+        model = scene_from_dict(data, path=path, without=without)
+        model.scene["initial_u"] = "static equilibrium of the full scene"
+        notes.append(f"without {', '.join(without)} the model has no static equilibrium; "
+                     f"starting from that of the full scene")
+    if not model.effects:
+        notes.append("no effects left: the model is a free mass (u = u0 + v0 t)")
+    model.scene["notes"] = notes
+    return model
 
 
 def _require(path: str, table: dict, key: str, where: str):
@@ -126,10 +161,13 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     try:
         model = Model(m, effects=effects, dofs=names, u0=None if static else state("u"), v0=state("v"),
                       without=without, name=meta.get("name", os.path.basename(path)[:-5]))
-        if static:
-            model.u0 = model.static_equilibrium()
     except (ValueError, TypeError) as exc:
         raise SceneError(f"{path}: {exc}") from None
+    if static:
+        try:
+            model.u0 = model.static_equilibrium()
+        except ArgumentError as exc:
+            raise SceneError(f"{path}: {exc}", key="initial") from None
     settings = {}
     for key in ("dt", "t_end"):
         if key in meta:
@@ -146,6 +184,7 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
         "plot_dof": meta.get("plot_dof", names[0]),
         "path": path,
         "initial_u": "static_equilibrium" if static else "given",
+        "notes": [],
     }
     if model.scene["plot_dof"] not in names:
         raise SceneError(f"{path}: [scene] plot_dof: unknown DOF {model.scene['plot_dof']!r}")

@@ -49,7 +49,7 @@ struct Convert {
       raise_type_error(p.name, "expected one of " + p.listing() + ", got " +
                                    std::string(py::str(py::type::of(v).attr("__name__"))));
     const std::string s = v.cast<std::string>();
-    if (std::string(p.name) == "mode" && s == "none")
+    if (s == "none" && p.index_of("one_iteration") >= 0)
       raise_value_error(p.name, "'none' is now 'one_iteration' (one Newton iteration on the full residual, then "
                                 "accept) or 'incremental' (the textbook incremental format)");
     const int k = p.index_of(s);
@@ -148,7 +148,12 @@ S construct(const py::args& args, const py::kwargs& kwargs) {
       if (given.contains("newton"))
         raise_type_error("iteration", "give the mode either as iteration= or as newton=Newton(mode=...), not both");
       Newton::parameters(s.newton, [&](auto& field, const auto& p) {
-        if (std::string(p.name) == "mode") Convert{Newton::name}(field, p, given["iteration"]);
+        if constexpr (std::is_same_v<std::decay_t<decltype(p)>, param::Choice>) {
+          if (std::string(p.name) != "mode") return;
+          param::Choice named = p;  // errors name the shortcut
+          named.name = "iteration";
+          Convert{S::name}(field, named, given["iteration"]);
+        }
       });
     }
   }
@@ -212,8 +217,10 @@ void bind_scheme(py::module_& m, py::list& keys) {
       .def_property_readonly("order_v", &S::order_v, "global order of accuracy of the reported velocity");
   if constexpr (nvib::has_newton<S>::value)
     cls.def_property_readonly("iteration", [](const S& s) { return nvib::to_string(s.newton.mode); });
+  py::list factories;
   if constexpr (nvib::has_factories<S>::value) {
     S::factories([&](const char* method, const param::Real& p, S (*make)(double, Newton)) {
+      factories.append(py::dict(py::arg("method") = method, py::arg("parameter") = p.name, py::arg("doc") = p.doc));
       const std::string pname = p.name, owner = std::string(S::name) + "." + method;
       cls.def_static(
           method,
@@ -237,6 +244,8 @@ void bind_scheme(py::module_& m, py::list& keys) {
           p.doc);
     });
   }
+  cls.def_static("factories", [factories]() { return factories.attr("copy")(); },
+                 "the named constructors: method, its one parameter, doc");
   keys.append(py::make_tuple(S::key, cls));
 }
 

@@ -69,17 +69,25 @@ void check_no_alloc(const char* what, const Scheme& scheme, const ModelT& model)
   CHECK(g_news == 0);
 }
 
+nvib::Newton mode(nvib::NewtonMode m) {
+  nvib::Newton nw;
+  nw.mode = m;
+  return nw;
+}
+
+// Every scheme of the registry with its defaults, then the variants that take other paths.
 template <class ModelT>
 void all_schemes(const std::string& label, const ModelT& model) {
-  check_no_alloc((label + " CentralDifference").c_str(), nvib::CentralDifference(), model);
+  nvib::AllSchemes::for_each([&](auto* tag) {
+    using S = std::remove_pointer_t<decltype(tag)>;
+    check_no_alloc((label + " " + nvib::scheme_repr(S{})).c_str(), S{}, model);
+  });
   check_no_alloc((label + " CentralDifference(half_step)").c_str(),
                  nvib::CentralDifference(nvib::CentralDifference::Velocity::half_step), model);
-  check_no_alloc((label + " Zhai").c_str(), nvib::Zhai(), model);
-  check_no_alloc((label + " CEMDTS").c_str(), nvib::CEMDTS(0.45), model);
-  check_no_alloc((label + " Newmark newton").c_str(), nvib::Newmark(0.25, 0.5, nvib::Iteration::newton), model);
-  check_no_alloc((label + " Newmark none").c_str(), nvib::Newmark(0.25, 0.5, nvib::Iteration::none), model);
-  check_no_alloc((label + " GeneralizedAlpha").c_str(), nvib::GeneralizedAlpha::from_rho_inf(0.8), model);
-  check_no_alloc((label + " PreciseIntegration").c_str(), nvib::PreciseIntegration(20, 2, 1), model);
+  for (auto m : {nvib::NewtonMode::modified, nvib::NewtonMode::initial, nvib::NewtonMode::incremental,
+                 nvib::NewtonMode::one_iteration})
+    check_no_alloc((label + " Newmark " + nvib::to_string(m)).c_str(), nvib::Newmark(0.25, 0.5, mode(m)), model);
+  check_no_alloc((label + " GeneralizedAlpha rho 0.8").c_str(), nvib::GeneralizedAlpha::from_rho_inf(0.8), model);
   check_no_alloc((label + " PreciseIntegration order 3").c_str(), nvib::PreciseIntegration(20, 3, 2), model);
 }
 

@@ -1,6 +1,7 @@
 """Closed-form solutions used as references.
 
 - ``linear_sdof``: m x'' + c x' + k x = 0, under-damped or undamped.
+- ``forced_linear_sdof``: the same under a harmonic force A sin(W t + phase).
 - ``hardening``: m x'' + k0 (1 + a x^2) x = 0 (the hardening oscillator of
   Yang et al. 2017, section 4.2) is the undamped Duffing oscillator
   x'' + alpha x + beta x^3 = 0 with alpha = k0/m, beta = k0 a/m. From rest at
@@ -84,6 +85,30 @@ def _hardening_parameters(m: float, k0: float, a: float, x0: float, v0: float) -
     phi = math.acos(min(1.0, max(-1.0, x0 / amp)))
     phase = float(special.ellipkinc(phi, me))
     return amp, w, me, -phase if v0 > 0 else phase
+
+
+def forced_linear_sdof(t, *, m: float, k: float, c: float = 0.0, x0: float = 1.0, v0: float = 0.0,
+                       amplitude: float, omega: float, phase: float = 0.0):
+    """Displacement and velocity of m x'' + c x' + k x = amplitude sin(omega t + phase) from (x0, v0)
+    (0 <= damping ratio < 1, not at resonance): the steady state plus the free response that matches the start."""
+    m, k, c, x0, v0 = _params(m=m, k=k, c=c, x0=x0, v0=v0)
+    amplitude, omega, phase = (_checks.real(n, x) for n, x in (("amplitude", amplitude), ("omega", omega),
+                                                                ("phase", phase)))
+    d = k - m * omega ** 2
+    det = d * d + (c * omega) ** 2
+    if det == 0.0:
+        raise _checks.value_error("omega", "undamped resonance (omega^2 = k/m): no steady state")
+    p, q = amplitude * d / det, -amplitude * c * omega / det  # x_p = p sin(th) + q cos(th), th = omega t + phase
+
+    def particular(tt):
+        th = omega * tt + phase
+        return p * np.sin(th) + q * np.cos(th), omega * (p * np.cos(th) - q * np.sin(th))
+
+    t = _times(t)
+    xp, vp = particular(t)
+    xp0, vp0 = particular(0.0)
+    xh, vh = linear_sdof(t, m=m, k=k, c=c, x0=x0 - xp0, v0=v0 - vp0)
+    return xp + xh, vp + vh
 
 
 def hardening(t, *, m: float = 1.0, k0: float = 100.0, a: float = 30.0, x0: float = 1.5, v0: float = 0.0):

@@ -1,5 +1,5 @@
-"""The demo run: the hardening oscillator (Yang et al. 2017, section 4.2) with
-every scheme, compared with its closed-form solution."""
+"""nvib demo: the hardening oscillator (Yang et al. 2017, section 4.2) with
+every scheme of the registry, compared with its closed-form solution."""
 
 from __future__ import annotations
 
@@ -7,9 +7,10 @@ import time
 
 import numpy as np
 
-from . import _core, exact
-from ._model import Model
-from ._solve import solve
+from .._model import Model
+from .._schemes import scheme_classes
+from .._solve import solve
+from ..analysis import exact
 
 M, K0, A, X0, T_END = 1.0, 100.0, 30.0, 1.5, 0.3
 
@@ -20,14 +21,8 @@ def hardening_model() -> Model:
 
 
 def demo_schemes():
-    return [
-        ("LCDM", _core.CentralDifference()),
-        ("CEMDTS(0.45)", _core.CEMDTS(0.45)),
-        ("Zhai(1/2,1/2)", _core.Zhai(0.5, 0.5)),
-        ("Newmark", _core.Newmark(0.25, 0.5)),
-        ("GalphaM(1/2,1/2)", _core.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5)),
-        ("PIM", _core.PreciseIntegration()),
-    ]
+    """(label, scheme) for every scheme of the registry, with its defaults."""
+    return [(cls().label, cls()) for cls in scheme_classes()]
 
 
 def run(dt: float = 1e-3, repeats: int = 5) -> list[dict]:
@@ -56,10 +51,12 @@ def run(dt: float = 1e-3, repeats: int = 5) -> list[dict]:
 
 
 def table(rows: list[dict]) -> str:
-    head = f"{'scheme':<18} {'max rel. energy err':>19} {'max |x - x_exact|':>17} {'force evals':>11} {'Newton it.':>10} {'wall time':>10}"
+    w = max(len("scheme"), *(len(r["scheme"]) for r in rows))
+    head = (f"{'scheme':<{w}} {'max rel. energy err':>19} {'max |x - x_exact|':>17} {'force evals':>11} "
+            f"{'Newton it.':>10} {'wall time':>10}")
     lines = [head, "-" * len(head)]
     for r in rows:
-        lines.append(f"{r['scheme']:<18} {r['max_rel_energy_error']:>19.3e} {r['max_abs_error']:>17.3e} "
+        lines.append(f"{r['scheme']:<{w}} {r['max_rel_energy_error']:>19.3e} {r['max_abs_error']:>17.3e} "
                      f"{r['force_evals']:>11d} {r['newton_iters']:>10d} {r['wall_time_s'] * 1e6:>8.0f}us")
     return "\n".join(lines)
 
@@ -92,3 +89,29 @@ def plot(path: str, dt: float = 1e-3) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def add_parser(sub) -> None:
+    from . import _common as c
+
+    p = sub.add_parser("demo", help="hardening oscillator with every scheme against its closed form")
+    p.add_argument("--dt", type=c.positive_real, default=1e-3, help="time step [s] (default 1e-3, the paper's)")
+    p.add_argument("--repeats", type=c.positive_int, default=5, help="timing repeats (the best is shown)")
+    p.add_argument("--plot", metavar="PNG", help="write error histories and phase loci to this PNG")
+    p.set_defaults(func=lambda args, parser: c.run_checked(command, args, parser), subparser=p)
+
+
+def command(args) -> int:
+    from . import _common as c
+
+    if args.plot:
+        c.check_output("--plot", args.plot, c.PLOT_FORMATS)
+    print("Hardening oscillator m x'' + k0 (1 + a x^2) x = 0 (Yang et al. 2017, section 4.2)")
+    print(f"m = {M:g}, k0 = {K0:g}, a = {A:g}, x0 = {X0:g}, dt = {args.dt:g} s, "
+          f"t_end = {T_END:g} s; reference: closed form x0 cn(w t | m) (Jacobi elliptic)")
+    print()
+    print(table(run(dt=args.dt, repeats=args.repeats)))
+    if args.plot:
+        plot(args.plot, dt=args.dt)
+        print(f"\nplot written to {args.plot}")
+    return 0

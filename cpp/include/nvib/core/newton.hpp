@@ -31,7 +31,8 @@ namespace nvib {
 // incremental:   the textbook incremental format (Chopra, Dynamics of Structures,
 //                section 5.7): tangent at the start of the step, the step's force
 //                increment linearised with it, no equilibrium iteration; the
-//                equilibrium error of earlier steps is carried, never corrected;
+//                equilibrium error of earlier steps is carried, never corrected,
+//                so it is first order on nonlinear models;
 // one_iteration: one Newton iteration on the full residual from the predictor,
 //                then accept. Unlike the incremental format it starts from the
 //                full residual, so earlier equilibrium errors are corrected.

@@ -20,6 +20,8 @@
 // M a_n + G_n = 0, is taken as satisfied and subtracted, and the increment of G
 // is linearised at the start of the step:
 //   (1-am) M (a_{n+1} - a_n) + (1-af) [K_t du + C_t dv + G(u_n, v_n, t_{n+1}) - G_n] = 0.
+// For am = af this is Newmark's incremental format divided by (1 - am): the
+// paper's GaM (am = af = 1/2) and Newmark then give the same steps.
 #pragma once
 
 #include <algorithm>
@@ -109,8 +111,11 @@ struct GeneralizedAlpha {
     if (beta != 0.25 || gamma != 0.5) s += "," + short_number(beta) + "," + short_number(gamma);
     return s + ")";
   }
-  // Second order exactly when gamma = 1/2 - alpha_m + alpha_f (Chung & Hulbert 1993).
-  int order_u() const { return std::abs(gamma - (0.5 - alpha_m + alpha_f)) < 1e-12 ? 2 : 1; }
+  // Second order exactly when gamma = 1/2 - alpha_m + alpha_f (Chung & Hulbert 1993), except in the
+  // incremental format, first order on nonlinear models (its linearisation error is never corrected).
+  int order_u() const {
+    return std::abs(gamma - (0.5 - alpha_m + alpha_f)) < 1e-12 && newton.mode != NewtonMode::incremental ? 2 : 1;
+  }
   int order_v() const { return order_u(); }
   template <class M>
   using stepper = GeneralizedAlphaStepper<M>;

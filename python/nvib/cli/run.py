@@ -1,0 +1,200 @@
+"""nvib run SCENE: integrate a scene with one scheme, print a summary, optionally save and plot the run."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections import Counter
+
+from . import _common as c
+
+MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
+RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
+             "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof"}
+
+EPILOG = """\
+Scheme parameters accept fractions (--eta 1/12). Exit status: 0 success, 1 the run failed
+(diverged, Newton failed; partial --out/--plot still written), 2 bad input.
+
+examples:
+  nvib run hardening --scheme newmark --plot hardening.png
+  nvib run vehicle --without contact --dof z_w1 --energy --out vehicle.npz
+  nvib run building --scheme galpha --rho-inf 0.8 --dt 1e-3 --save-every 10 --out building.csv
+"""
+
+
+def add_parser(sub) -> None:
+    from .. import schemes
+    from .._io import FORMATS
+
+    p = sub.add_parser("run", help="integrate a scene and summarise, save or plot the run",
+                       usage="%(prog)s SCENE [--scheme NAME] [scheme parameters] [--dt DT] [--t-end T] "
+                             "[--without NAME ...] [--dof NAME] [--energy] [--out FILE] [--plot PNG] [...]",
+                       description="Integrate a scene (a built-in name or a .toml file) with one scheme.",
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", metavar="SCENE", help="built-in scene name (see nvib scenes) or path to a .toml scene")
+    g = p.add_argument_group("scheme")
+    keys = list(schemes())
+    g.add_argument("--scheme", choices=keys, default="cemdts",
+                   help="time-stepping scheme: " + ", ".join(f"{k} ({cls.__name__})" for k, cls in schemes().items())
+                        + " (default cemdts)")
+    c.add_scheme_options(g)
+    g = p.add_argument_group("run")
+    g.add_argument("--dt", type=c.positive_real, help="time step [s] (default: the scene's)")
+    g.add_argument("--t-end", type=c.positive_real, metavar="T", help="end time [s] (default: the scene's)")
+    g.add_argument("--save-every", type=c.positive_int, metavar="K",
+                   help=f"save every K-th step (default 1, or more to keep at most {MAX_SAVED} states)")
+    g.add_argument("--without", nargs="+", action="extend", metavar="NAME",
+                   help="leave out effects by name or type (repeatable)")
+    g.add_argument("--max-displacement", type=c.bound, metavar="U",
+                   help="stop as diverged once some |u_i| exceeds U (default: 1e10 x max(1, max|u0|, "
+                        "max|v0| x duration); 'inf': only non-finite states)")
+    g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
+    g.add_argument("--energy", action="store_true",
+                   help="record the energy balance; a run whose balance error exceeds --max-energy-error times "
+                        "the energy scale stops as diverged")
+    g.add_argument("--max-energy-error", type=c.bound, metavar="F",
+                   help="with --energy: stop as diverged once the energy balance error exceeds F times the energy "
+                        "scale (default 0.5; 'inf': no check)")
+    g = p.add_argument_group("output")
+    g.add_argument("--out", metavar="FILE", help=f"write the history to FILE{' or FILE'.join(FORMATS)}")
+    g.add_argument("--plot", metavar="PNG", help="write histories, phase locus (and energy) to this PNG")
+    g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar on stderr for runs over a second (default: when stderr is a terminal)")
+    p.set_defaults(func=lambda args, parser: c.run_checked(run, args, parser), subparser=p)
+
+
+def effect_summary(model) -> str:
+    if not model.effects:
+        return "(none)"
+    counts = Counter(e.type for e in model.effects)
+    return ", ".join(k if n == 1 else f"{k} x{n}" for k, n in counts.items())
+
+
+def load_model(args):
+    from .. import load_scene
+
+    try:
+        return load_scene(args.scene, without=args.without or ())
+    except OSError as exc:  # a missing file
+        raise c.Usage("SCENE", str(exc).removeprefix("scene: ")) from None
+    except ValueError as exc:  # unknown name, malformed scene, unknown --without
+        raise c.usage_from(exc, RUN_FLAGS, default="SCENE") from None
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from .. import _core, save_result, solve
+    from .._io import FORMATS
+    from .._progress import ProgressBar
+
+    if args.out:
+        c.check_output("--out", args.out, FORMATS)
+    if args.plot:
+        c.check_output("--plot", args.plot, c.PLOT_FORMATS)
+    scheme = c.make_scheme(args.scheme, args)
+    model = load_model(args)
+    dof = args.dof if args.dof is not None else model.scene["plot_dof"]
+    if dof not in model.dofs:
+        raise c.Usage("--dof", f"unknown DOF {dof!r} in scene {model.scene['name']!r} (DOFs: {', '.join(model.dofs)})")
+    dt = args.dt if args.dt is not None else model.scene["dt"]
+    t_end = args.t_end if args.t_end is not None else model.scene["t_end"]
+    if dt is None:
+        raise c.Usage("--dt", f"the scene {model.scene['name']!r} sets no dt; give --dt")
+    if t_end is None:
+        raise c.Usage("--t-end", f"the scene {model.scene['name']!r} sets no t_end; give --t-end")
+    try:
+        n_steps = _core.steps_to_reach(0.0, t_end, dt)
+    except (ValueError, OverflowError) as exc:
+        raise c.usage_from(exc, RUN_FLAGS, default="--dt") from None
+    save_every = args.save_every if args.save_every is not None else max(1, math.ceil(n_steps / MAX_SAVED))
+
+    for note in model.scene["notes"]:
+        print(f"note: {note}", file=sys.stderr)
+    show = args.progress if args.progress is not None else c.isatty(sys.stderr)
+    bar = ProgressBar(sys.stderr, enabled=show)
+    t0 = time.perf_counter()
+    try:
+        res = solve(model, scheme, dt=dt, t_end=t_end, save_every=save_every, throw=False,
+                    max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy,
+                    max_energy_error=args.max_energy_error)
+    except KeyboardInterrupt:
+        bar.close(done=False)
+        print("nvib run: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, TypeError) as exc:
+        bar.close(done=False)
+        raise c.usage_from(exc, RUN_FLAGS) from None
+    elapsed = time.perf_counter() - t0
+    bar.close(done=res.success)
+
+    print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
+    code = 0
+    if args.out:
+        try:
+            save_result(args.out, res, {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
+                                        "without": np.array(list(args.without or []), dtype=str)})
+            print(f"wrote {args.out}")
+        except OSError as exc:
+            print(f"nvib run: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+    if args.plot:
+        from ..plot import plot_run
+
+        try:
+            plot_run(res, model, dof, args.plot)
+            print(f"wrote {args.plot}")
+        except OSError as exc:
+            print(f"nvib run: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+    if not res.success:
+        print(f"nvib run: error: {failure_line(res, scheme, dt)}", file=sys.stderr)
+        return 1
+    return code
+
+
+def failure_line(result, scheme, dt: float) -> str:
+    """What failed, with which scheme and step, and what to try."""
+    from .. import Status
+
+    f = result.failure
+    hints = {
+        Status.diverged: "try a smaller --dt" + (" or an implicit scheme" if scheme.is_explicit else ""),
+        Status.newton_failed: "try a smaller --dt" + ("" if getattr(scheme, "iteration", "newton") == "newton"
+                                                     else " or --iteration newton"),
+        Status.singular_matrix: "try a smaller --dt",
+    }
+    hint = hints.get(result.status, "")
+    return f"{f.message} (with {scheme.name}, dt = {dt:g} s)" + (f"; {hint}" if hint else "")
+
+
+def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args) -> None:
+    s = model.scene
+    stats = res.stats.as_dict()
+    title = f"{s['name']}: {s['title']}" if s.get("title") else s["name"]
+    lines = [("scene", title)]
+    if args.without:
+        lines.append(("without", ", ".join(args.without)))
+    lines.append(("scheme", repr(scheme)))
+    saved = f"{len(res.t)} state{'s' if len(res.t) != 1 else ''} saved"
+    if save_every > 1:
+        saved += f" (every {save_every} steps)"
+    lines.append(("steps", f"{stats['num_steps']} of {res.num_steps_requested}, dt = {dt:g} s, "
+                           f"t_end = {t_end:g} s; {saved}"))
+    lines.append(("status", res.status.name))
+    lines.append(("wall time", f"{c.seconds(elapsed)} (integrator loop {c.seconds(stats['wall_time'])})"))
+    counters = [(k.removeprefix("num_"), v) for k, v in stats.items() if k not in ("wall_time", "num_steps")]
+    lines.append(("counters", ", ".join(f"{k} {v}" for k, v in counters)))
+    if len(res.t):
+        j = res.dofs.index(dof)
+        u, v, a = (float(x[-1, j]) + 0.0 for x in (res.u, res.v, res.a))  # + 0.0: no "-0"
+        lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g}, v = {v:.9g}, a = {a:.9g}"))
+    if res.energy is not None:
+        rel = res.energy.relative_balance_error()
+        lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D - W - E0| / max energy)"
+                      if math.isfinite(rel) else "relative balance error: n/a (the energies overflowed)"))
+    w = max(len(k) for k, _ in lines)
+    print("\n".join(f"{k:<{w}}  {v}" for k, v in lines))
