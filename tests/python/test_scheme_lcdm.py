@@ -1,0 +1,27 @@
+"""CentralDifference (LCDM): the half-step variant reports v_{n+1/2}, first order against v(t_{n+1})."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import nvib
+from _orders import check_declared_orders, hardening_model
+
+
+def test_declared_orders_of_the_variants():
+    half = nvib.CentralDifference(velocity="half_step")
+    assert (half.order_u, half.order_v) == (2, 1)
+    assert (nvib.CentralDifference().order_u, nvib.CentralDifference().order_v) == (2, 2)
+
+
+@pytest.mark.parametrize("problem", ["forced", "hardening"])
+def test_half_step_orders(problem):
+    check_declared_orders(nvib.CentralDifference(velocity="half_step"), problem)
+
+
+def test_both_velocities_share_their_displacements():
+    model = hardening_model()
+    a = nvib.solve(model, nvib.CentralDifference(), dt=1e-3, t_end=0.3)
+    b = nvib.solve(model, nvib.CentralDifference(velocity="half_step"), dt=1e-3, t_end=0.3)
+    assert np.max(np.abs(a.u - b.u)) <= 1e-12 * np.max(np.abs(a.u))
