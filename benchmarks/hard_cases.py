@@ -87,10 +87,10 @@ def stability_scan(T: float = 1000.0) -> list[str]:
         cells = []
         for name, make in schemes.items():
             r = nvib.solve(model, make(), dt=dt, t_end=T, throw=False, save_every=10**9)
-            if r.status == "success":
+            if r.success:
                 cells.append("–")
             else:
-                cells.append(f"{r.failure['t']:.3g}")
+                cells.append(f"{r.failure.t:.3g}")
                 first_unstable.setdefault(name, om)
         if any(c != "–" for c in cells):
             rows.append(f"| {om:.2f} | " + " | ".join(cells) + " |")

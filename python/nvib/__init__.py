@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 
-from . import _schemes
+from . import _core, _schemes
 from ._core import DEFAULT_MAX_ENERGY_ERROR
 from ._io import save_result
 from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, DivergenceError, NvibError,
@@ -71,3 +71,9 @@ def include_dir() -> str:
 def cmake_dir() -> str:
     """Folder holding nvibConfig.cmake: pass it as nvib_DIR or in CMAKE_PREFIX_PATH."""
     return os.path.join(os.path.dirname(__file__), "share", "cmake", "nvib")
+
+
+def __getattr__(name: str) -> type[_core._Scheme]:
+    # Only for names not found otherwise; tells type checkers that the scheme
+    # classes, set from the registry above, are attributes of nvib.
+    raise AttributeError(f"module 'nvib' has no attribute {name!r}")

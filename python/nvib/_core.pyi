@@ -1,433 +1,168 @@
-# Type stub of the compiled module, generated from python/src/module.cpp with pybind11-stubgen.
-"""
-nvib C++ core (header-only library bound with pybind11)
-"""
-from __future__ import annotations
-import collections.abc
-import numpy
-import numpy.typing
-import typing
-__all__: list[str] = ['CEMDTS', 'CentralDifference', 'Effect', 'EffectModel', 'GeneralizedAlpha', 'HybridModel', 'Newmark', 'PreciseIntegration', 'Stats', 'Stepper', 'Zhai', 'default_max_displacement', 'expm', 'make_stepper', 'steps_to_reach']
+# Type stub of the compiled module nvib._core (python/src/). The scheme
+# classes are generated from the C++ registry (cpp/include/nvib/schemes/all.hpp):
+# they share the interface of _Scheme and are reached through SCHEMES or
+# module attributes; the other types are declared here.
+from enum import Enum
+from typing import Any, Callable, ClassVar, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+Array = npt.NDArray[np.float64]
+DEFAULT_MAX_ENERGY_ERROR: float
+
+class ArgumentError(ValueError):
+    argument: str | None
+
+class ArgumentTypeError(TypeError):
+    argument: str | None
+
+class Status(Enum):
+    success = 0
+    diverged = 1
+    newton_failed = 2
+    singular_matrix = 3
+
 class Stats:
-    def __init__(self) -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    def as_dict(self) -> dict:
-        ...
-    @property
-    def num_expm(self) -> int:
-        ...
-    @property
-    def num_factorizations(self) -> int:
-        ...
-    @property
-    def num_fd_force_evals(self) -> int:
-        ...
-    @property
-    def num_force_evals(self) -> int:
-        ...
-    @property
-    def num_linear_solves(self) -> int:
-        ...
-    @property
-    def num_newton_iters(self) -> int:
-        ...
-    @property
-    def num_steps(self) -> int:
-        ...
-    @property
-    def num_tangent_evals(self) -> int:
-        ...
-    @property
-    def wall_time(self) -> float:
-        ...
-class CentralDifference:
-    """
-    Leapfrog central difference method (LCDM). velocity='synchronized' or 'half_step'.
-    """
-    def __init__(self, *, velocity: str = 'synchronized') -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    @property
-    def is_explicit(self) -> bool:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def order(self) -> int:
-        ...
-    @property
-    def velocity(self) -> str:
-        ...
-class Zhai:
-    """
-    Zhai's explicit two-step method (Zhai 1996).
-    """
-    def __init__(self, psi: typing.SupportsFloat | typing.SupportsIndex = 0.5, phi: typing.SupportsFloat | typing.SupportsIndex = 0.5) -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    @property
-    def is_explicit(self) -> bool:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def order(self) -> int:
-        ...
-    @property
-    def phi(self) -> float:
-        ...
-    @property
-    def psi(self) -> float:
-        ...
-class CEMDTS:
-    """
-    Corrected explicit method of double time steps, as reconstructed from the properties stated in Yang et al. 2017.
-    """
-    def __init__(self, eta: typing.SupportsFloat | typing.SupportsIndex = 0.45) -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    @property
-    def eta(self) -> float:
-        ...
-    @property
-    def is_explicit(self) -> bool:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def order(self) -> int:
-        ...
-class Newmark:
-    """
-    Newmark's method with Newton ('newton'), modified Newton ('modified') or the incremental format ('none': one linearised solve per step, accepted without an equilibrium check; the residual it leaves is reported in Result.max_residual).
-    """
-    def __init__(self, beta: typing.SupportsFloat | typing.SupportsIndex = 0.25, gamma: typing.SupportsFloat | typing.SupportsIndex = 0.5, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    @property
-    def atol(self) -> float:
-        ...
-    @property
-    def beta(self) -> float:
-        ...
-    @property
-    def gamma(self) -> float:
-        ...
-    @property
-    def is_explicit(self) -> bool:
-        ...
-    @property
-    def iteration(self) -> str:
-        ...
-    @property
-    def jacobian(self) -> str:
-        ...
-    @property
-    def max_iter(self) -> int:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def order(self) -> int:
-        ...
-    @property
-    def rtol(self) -> float:
-        ...
-class GeneralizedAlpha:
-    """
-    Generalized-alpha (Chung & Hulbert 1993, alpha on the old level). Defaults are the paper's alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2 (= from_rho_inf(1)). iteration: 'newton', 'modified' or 'none' (the incremental format: one linearised solve per step, accepted without an equilibrium check; the residual it leaves is reported in Result.max_residual).
-    """
+    num_steps: int
+    num_force_evals: int
+    num_fd_force_evals: int
+    num_tangent_evals: int
+    num_newton_iters: int
+    num_factorizations: int
+    num_linear_solves: int
+    num_expm: int
+    wall_time: float
+    def as_dict(self) -> dict[str, float]: ...
+
+class Failure:
+    status: Status
+    step: int
+    t: float
+    dof: int
+    residuals: list[float]
+    message: str
+
+class Newton:
+    mode: str
+    max_iter: int
+    rtol: float
+    atol: float
+    jacobian: str
+    accepts_unconverged: bool
+    def __init__(self, *, mode: str = ..., max_iter: int = ..., rtol: float = ..., atol: float = ...,
+                 jacobian: str = ...) -> None: ...
     @staticmethod
-    def from_rho_inf(rho_inf: typing.SupportsFloat | typing.SupportsIndex, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> GeneralizedAlpha:
-        ...
+    def parameters() -> list[dict[str, Any]]: ...
+
+class _Scheme:
+    """What every scheme class of the registry has (see SCHEMES)."""
+    key: ClassVar[str]
+    is_explicit: ClassVar[bool]
+    name: str
+    label: str
+    short_label: str
+    order_u: int
+    order_v: int
+    def __init__(self, *args: Any, **kwargs: Any) -> None: ...
     @staticmethod
-    def hht(alpha: typing.SupportsFloat | typing.SupportsIndex, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> GeneralizedAlpha:
-        ...
+    def parameters() -> list[dict[str, Any]]: ...
     @staticmethod
-    def wbz(alpha: typing.SupportsFloat | typing.SupportsIndex, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> GeneralizedAlpha:
-        ...
-    def __init__(self, alpha_m: typing.SupportsFloat | typing.SupportsIndex = 0.5, alpha_f: typing.SupportsFloat | typing.SupportsIndex = 0.5, beta: typing.SupportsFloat | typing.SupportsIndex = 0.25, gamma: typing.SupportsFloat | typing.SupportsIndex = 0.5, *, iteration: str = 'newton', max_iter: typing.SupportsInt | typing.SupportsIndex = 20, rtol: typing.SupportsFloat | typing.SupportsIndex = 1e-10, atol: typing.SupportsFloat | typing.SupportsIndex = 1e-12, jacobian: str = 'analytic') -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    @property
-    def alpha_f(self) -> float:
-        ...
-    @property
-    def alpha_m(self) -> float:
-        ...
-    @property
-    def atol(self) -> float:
-        ...
-    @property
-    def beta(self) -> float:
-        ...
-    @property
-    def gamma(self) -> float:
-        ...
-    @property
-    def is_explicit(self) -> bool:
-        ...
-    @property
-    def iteration(self) -> str:
-        ...
-    @property
-    def jacobian(self) -> str:
-        ...
-    @property
-    def max_iter(self) -> int:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def order(self) -> int:
-        ...
-    @property
-    def rtol(self) -> float:
-        ...
-class PreciseIntegration:
-    """
-    Precise integration method (Zhong & Williams 1994): 2^N exponential of the linear part, Lagrange predictor-corrector for the nonlinear remainder.
-    """
-    def __init__(self, *, squarings: typing.SupportsInt | typing.SupportsIndex = 20, order: typing.SupportsInt | typing.SupportsIndex = 2, corrections: typing.SupportsInt | typing.SupportsIndex = 1) -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    @property
-    def corrections(self) -> int:
-        ...
-    @property
-    def is_explicit(self) -> bool:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def order(self) -> int:
-        ...
-    @property
-    def squarings(self) -> int:
-        ...
+    def factories() -> list[dict[str, str]]: ...
+
+SCHEMES: tuple[tuple[str, type[_Scheme]], ...]
+
+def __getattr__(name: str) -> type[_Scheme]: ...  # the scheme classes, by their names
+
+class Energy:
+    kinetic: Array
+    potential: Array
+    work_in: Array
+    dissipated: Array
+    balance_error: Array
+    total: Array
+    def relative_balance_error(self) -> float: ...
+    def as_dict(self) -> dict[str, Array]: ...
+
+class Result:
+    t: Array
+    u: Array
+    v: Array
+    a: Array
+    energy: Energy | None
+    dofs: list[str]
+    dof_indices: list[int]
+    stats: Stats
+    status: Status
+    success: bool
+    failure: Failure | None
+    num_steps_requested: int
+    max_residual: float | None
+    scheme: _Scheme
+    dt: float
+
 class Effect:
-    def __init__(self, type: str, index: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], coef: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], p0: typing.SupportsFloat | typing.SupportsIndex = 0.0, p1: typing.SupportsFloat | typing.SupportsIndex = 0.0, p2: typing.SupportsFloat | typing.SupportsIndex = 0.0, *, name: str = '', signal: str = 'none', amplitude: typing.SupportsFloat | typing.SupportsIndex = 0.0, omega: typing.SupportsFloat | typing.SupportsIndex = 0.0, phase: typing.SupportsFloat | typing.SupportsIndex = 0.0, t: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = [], values: collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex] = []) -> None:
-        ...
-    def __repr__(self) -> str:
-        ...
-    def value(self, d: typing.SupportsFloat | typing.SupportsIndex, dd: typing.SupportsFloat | typing.SupportsIndex, t: typing.SupportsFloat | typing.SupportsIndex) -> float:
-        ...
-    @property
-    def coef(self) -> list[float]:
-        ...
-    @property
-    def index(self) -> list[int]:
-        ...
-    @property
-    def is_linear(self) -> bool:
-        ...
-    @property
-    def is_load(self) -> bool:
-        ...
-    @property
-    def name(self) -> str:
-        ...
-    @property
-    def type(self) -> str:
-        ...
-    @property
-    def uses_time(self) -> bool:
-        ...
-    @property
-    def uses_velocity(self) -> bool:
-        ...
-class EffectModel:
-    """
-    declared effects only: no Python in the loop
-    """
-    def __init__(self, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], effects: collections.abc.Sequence[Effect], K: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], C: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> None:
-        ...
-    def force(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        ...
-    def kinetic(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> float:
-        ...
-    def potential(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> float:
-        ...
-    def tangent(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
-        ...
-    @property
-    def C(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def accounts_energy(self) -> bool:
-        ...
-    @property
-    def effects(self) -> list[Effect]:
-        ...
-    @property
-    def is_linear(self) -> bool:
-        ...
-    @property
-    def mass_matrix(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def num_evaluated_effects(self) -> int:
-        ...
-    @property
-    def size(self) -> int:
-        ...
-    @property
-    def uses_time(self) -> bool:
-        ...
-    @property
-    def uses_velocity(self) -> bool:
-        ...
-class HybridModel:
-    """
-    declared effects plus a Python force callable (the GIL is kept)
-    """
-    def __init__(self, mass: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], effects: collections.abc.Sequence[Effect], K: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], C: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], force: typing.Any, tangent: typing.Any, uses_velocity: bool, uses_time: bool, laws: collections.abc.Sequence[tuple[collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex], collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], typing.Any, typing.Any, str, bool, bool]] = []) -> None:
-        ...
-    def force(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        ...
-    def kinetic(self, arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> float:
-        ...
-    def potential(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex = 0.0) -> float:
-        ...
-    def tangent(self, u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], t: typing.SupportsFloat | typing.SupportsIndex) -> tuple:
-        ...
-    @property
-    def C(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def K(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def accounts_energy(self) -> bool:
-        ...
-    @property
-    def effects(self) -> list[Effect]:
-        ...
-    @property
-    def is_linear(self) -> bool:
-        ...
-    @property
-    def mass_matrix(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-        ...
-    @property
-    def num_evaluated_effects(self) -> int:
-        ...
-    @property
-    def size(self) -> int:
-        ...
-    @property
-    def uses_time(self) -> bool:
-        ...
-    @property
-    def uses_velocity(self) -> bool:
-        ...
+    type: str
+    name: str
+    index: list[int]
+    coef: list[float]
+    parameters: dict[str, float]
+    uses_velocity: bool
+    uses_time: bool
+    is_linear: bool
+    is_load: bool
+    def __init__(self, type: str, index: Sequence[int], coef: Sequence[float], parameters: dict[str, float] = ...,
+                 *, name: str = ..., signal: str = ..., amplitude: float = ..., omega: float = ...,
+                 phase: float = ..., t: Sequence[float] = ..., values: Sequence[float] = ...) -> None: ...
+    def value(self, d: float, dd: float, t: float) -> float: ...
+
+def laws() -> dict[str, dict[str, Any]]: ...
+
+class Model:
+    dofs: list[str]
+    has_python: bool
+    size: int
+    uses_velocity: bool
+    uses_time: bool
+    is_linear: bool
+    accounts_energy: bool
+    num_evaluated_effects: int
+    effects: list[Effect]
+    mass_matrix: Array
+    K: Array
+    C: Array
+    def __init__(self, mass: Array, effects: Sequence[Effect], K: Array, C: Array, dofs: Sequence[str],
+                 force: Callable[..., Any] | None = ..., tangent: Callable[..., Any] | None = ...,
+                 uses_velocity: bool = ..., uses_time: bool = ..., laws: Sequence[tuple] = ...) -> None: ...
+    def potential(self, u: Array, t: float = ...) -> float: ...
+    def kinetic(self, v: Array) -> float: ...
+    def force(self, u: Array, v: Array, t: float) -> Array: ...
+    def tangent(self, u: Array, v: Array, t: float) -> tuple[Array, Array]: ...
+    def static_equilibrium(self, t: float, u_guess: Array, rtol: float, max_iter: int) -> Array: ...
+
 class Stepper:
-    def initialize(self, t0: typing.SupportsFloat | typing.SupportsIndex, u0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
-        ...
-    def integrate(self, t_end: typing.SupportsFloat | typing.SupportsIndex, save_every: typing.SupportsInt | typing.SupportsIndex = 1, dofs: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], max_displacement: typing.SupportsFloat | typing.SupportsIndex = ..., observe_every: typing.SupportsInt | typing.SupportsIndex = 4096, observer: typing.Any = None, energy: bool = False, max_energy_error: typing.SupportsFloat | typing.SupportsIndex = ...) -> dict:
-        ...
-    def set_state(self, t: typing.SupportsFloat | typing.SupportsIndex, x: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> None:
-        ...
-    def state(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        """
-        the carried state [u; v; a; history...]
-        """
-    def step(self) -> str:
-        ...
-    @property
-    def a(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        ...
-    @property
-    def accepted_residual(self) -> float:
-        ...
-    @property
-    def dt(self) -> float:
-        ...
-    @property
-    def failure(self) -> dict:
-        ...
-    @property
-    def last_residuals(self) -> list[float]:
-        ...
-    @property
-    def scheme_name(self) -> str:
-        ...
-    @property
-    def size(self) -> int:
-        ...
-    @property
-    def stats(self) -> Stats:
-        ...
-    @property
-    def step_index(self) -> int:
-        ...
-    @property
-    def t(self) -> float:
-        ...
-    @property
-    def u(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        ...
-    @property
-    def v(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
-        ...
-def default_max_displacement(u: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], duration: typing.SupportsFloat | typing.SupportsIndex) -> float:
-    ...
-def expm(A: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], squarings: typing.SupportsInt | typing.SupportsIndex = 20) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
-    """
-    Matrix exponential by the 2^N algorithm of the precise integration method.
-    """
-@typing.overload
-def make_stepper(model: HybridModel, scheme: CentralDifference, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: HybridModel, scheme: Zhai, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: HybridModel, scheme: CEMDTS, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: HybridModel, scheme: Newmark, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: HybridModel, scheme: GeneralizedAlpha, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: HybridModel, scheme: PreciseIntegration, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: EffectModel, scheme: CentralDifference, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: EffectModel, scheme: Zhai, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: EffectModel, scheme: CEMDTS, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: EffectModel, scheme: Newmark, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: EffectModel, scheme: GeneralizedAlpha, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-@typing.overload
-def make_stepper(model: EffectModel, scheme: PreciseIntegration, dt: typing.SupportsFloat | typing.SupportsIndex) -> Stepper:
-    ...
-def steps_to_reach(t0: typing.SupportsFloat | typing.SupportsIndex, t_end: typing.SupportsFloat | typing.SupportsIndex, dt: typing.SupportsFloat | typing.SupportsIndex) -> int:
-    ...
+    t: float
+    step_index: int
+    dt: float
+    u: Array
+    v: Array
+    a: Array
+    stats: Stats
+    failure: Failure
+    last_residuals: list[float]
+    accepted_residual: float | None
+    def __init__(self, model: Model, scheme: _Scheme, dt: float) -> None: ...
+    def initialize(self, t0: float, u0: Array, v0: Array) -> None: ...
+    def step(self) -> tuple[Status, Failure | None]: ...
+    def state(self) -> Array: ...
+    def set_state(self, t: float, x: Array) -> None: ...
+    def integrate(self, t_end: float, save_every: int = ..., dofs: Sequence[int] = ..., max_displacement: float = ...,
+                  energy: bool = ..., max_energy_error: float = ...,
+                  progress: Callable[[int, int], None] | None = ...) -> Result: ...
+
+def solve(model: Model, scheme: _Scheme, dt: float, t_end: float, t0: float, u0: Array, v0: Array,
+          save_every: int = ..., dofs: Sequence[int] = ..., max_displacement: float = ..., energy: bool = ...,
+          max_energy_error: float = ..., progress: Callable[[int, int], None] | None = ...) -> Result: ...
+def expm(A: Array, squarings: int = ...) -> Array: ...
+def steps_to_reach(t0: float, t_end: float, dt: float) -> int: ...
+def default_max_displacement(u: Array, v: Array, duration: float) -> float: ...

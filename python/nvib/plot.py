@@ -98,13 +98,12 @@ def default_title(result, model) -> str:
 
 
 def _status_note(result) -> str | None:
-    if result.status == "success":
+    if result.success:
         return None
-    f = result.failure or {}
     what = {"diverged": "diverged", "newton_failed": "Newton failed",
-            "singular_matrix": "singular iteration matrix"}.get(result.status, result.status)
-    t, step = f.get("t"), f.get("step")
-    where = f" at t = {t:g} s (step {step})" if t is not None else ""
+            "singular_matrix": "singular iteration matrix"}.get(result.status.name, result.status.name)
+    f = result.failure
+    where = f" at t = {f.t:g} s (step {f.step})" if f is not None else ""
     return f"{what}{where}: partial history"
 
 
@@ -129,7 +128,7 @@ def plot_run(result, model, dof, path, title: str | None = None, *, dpi: int = 1
     fig, left, axes = _new_figure(3 if energy is not None else 2, split_first=bool(others))
 
     # The selected DOF gets its own axes: other DOFs may move on another scale (or in other units).
-    failed = result.status != "success"
+    failed = not result.success
     ax = left[0]
     ax.plot(ts, result.u[sel, col], lw=1.6, color="k")
     if failed:

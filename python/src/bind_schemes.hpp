@@ -80,6 +80,15 @@ inline std::string bounds_of(const param::Real& p) { return p.bounds(); }
 inline std::string bounds_of(const param::Int& p) { return p.bounds(); }
 inline std::string bounds_of(const param::Choice& p) { return p.listing(); }
 inline std::string bounds_of(const param::NewtonOptions&) { return ""; }
+// The range as data: (lo, hi, lo_open, hi_open) for reals and integers, the names for choices.
+inline py::object range_of(const param::Real& p) { return py::make_tuple(p.lo, p.hi, p.lo_open, p.hi_open); }
+inline py::object range_of(const param::Int& p) { return py::make_tuple(p.lo, p.hi, false, false); }
+inline py::object range_of(const param::Choice& p) {
+  py::tuple names(static_cast<size_t>(p.count));
+  for (int k = 0; k < p.count; ++k) names[static_cast<size_t>(k)] = py::str(p[k]);
+  return names;
+}
+inline py::object range_of(const param::NewtonOptions&) { return py::none(); }
 
 // Reals may be given by position (schemes only); everything else by name.
 template <class S>
@@ -87,7 +96,8 @@ constexpr bool positional_reals() {
   return !std::is_same_v<S, Newton>;
 }
 
-// [{name, kind, default, doc, bounds, positional}] in declaration order.
+// [{name, kind, default, doc, bounds, range, positional}] in declaration order; range is
+// (lo, hi, lo_open, hi_open) for a real or an integer, the allowed names for a choice.
 template <class S>
 py::list describe() {
   py::list out;
@@ -99,6 +109,7 @@ py::list describe() {
     d["default"] = to_python(value, p);
     d["doc"] = p.doc;
     d["bounds"] = bounds_of(p);
+    d["range"] = range_of(p);
     d["positional"] = positional_reals<S>() && std::string(kind_of(p)) == "real";
     out.append(d);
   });
@@ -184,7 +195,7 @@ template <class S>
 py::class_<S> bind_parameters(py::module_& m) {
   py::class_<S> cls(m, S::name, S::doc);
   cls.def(py::init([](const py::args& a, const py::kwargs& k) { return construct<S>(a, k); }))
-      .def_static("parameters", &describe<S>, "the declared parameters: name, kind, default, doc, bounds")
+      .def_static("parameters", &describe<S>, "the declared parameters: name, kind, default, doc, bounds, range, positional")
       .def("__repr__", &repr_of<S>)
       .def("__eq__", [](const S& a, py::object b) { return py::isinstance<S>(b) && repr_of(a) == repr_of(b.cast<S>()); })
       .def("__hash__", [](const S& s) { return py::hash(py::str(repr_of(s))); })
@@ -227,17 +238,17 @@ void bind_scheme(py::module_& m, py::list& keys) {
           [make, pname, owner](const py::args& args, py::kwargs kwargs) {
             if (args.size() > 1) raise_type_error(owner, "takes 1 positional argument (" + pname + "), got " +
                                                              std::to_string(args.size()));
+            for (auto item : kwargs) {  // unknown names first, as Python does
+              const std::string key = item.first.cast<std::string>();
+              if (key != pname && key != "newton" && key != "iteration")
+                raise_type_error(key, "unknown parameter of " + owner + " (expected " + pname + ", newton, iteration)");
+            }
             if (args.size() == 1 && kwargs.contains(pname.c_str()))
               raise_type_error(pname, "given twice (by position and by name) to " + owner);
             if (args.empty() && !kwargs.contains(pname.c_str())) raise_type_error(pname, "missing (required by " + owner + ")");
             const py::object value = args.size() == 1 ? py::object(args[0]) : py::object(kwargs[pname.c_str()]);
             const double x = to_real(value, pname);
             if (kwargs.contains(pname.c_str())) PyDict_DelItemString(kwargs.ptr(), pname.c_str());
-            for (auto item : kwargs) {
-              const std::string key = item.first.cast<std::string>();
-              if (key != "newton" && key != "iteration")
-                raise_type_error(key, "unknown parameter of " + owner + " (expected " + pname + ", newton, iteration)");
-            }
             const S options = construct<S>(py::args(), kwargs);  // only the Newton options
             return make(x, options.newton);
           },

@@ -34,14 +34,15 @@ else:  # pragma: no cover
 
 # The paper's settings (PAPER.md): Newmark beta = 1/4, gamma = 1/2; GaM alpha_m =
 # alpha_f = 1/2, beta = 1/4, gamma = 1/2; CEMDTS eta = 0.45; PIM predictor-corrector.
-# "none" is the paper's incremental format, "newton" full Newton-Raphson.
+# "one_iteration": one Newton iteration on the full residual per step, accepted;
+# "newton": full Newton-Raphson; "modified": one tangent per step.
 SCHEMES = {
     "LCDM": lambda: nvib.CentralDifference(),
     "CEMDTS": lambda: nvib.CEMDTS(0.45),
     "Zhai": lambda: nvib.Zhai(0.5, 0.5),
-    "Newmark-none": lambda: nvib.Newmark(0.25, 0.5, iteration="none"),
+    "Newmark-one_iteration": lambda: nvib.Newmark(0.25, 0.5, iteration="one_iteration"),
     "Newmark-newton": lambda: nvib.Newmark(0.25, 0.5, iteration="newton"),
-    "GaM-none": lambda: nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="none"),
+    "GaM-one_iteration": lambda: nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="one_iteration"),
     "GaM-newton": lambda: nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="newton"),
     "PIM": lambda: nvib.PreciseIntegration(squarings=20, order=2, corrections=1),
     # modified Newton: one tangent per step (Newton's defaults otherwise)
@@ -60,41 +61,43 @@ def scene(name: str):
     return nvib.load_scene(name)
 
 
-def _base(res, wall: float) -> dict:
+def _base(res, run: dict) -> dict:
     steps = res.stats.num_steps
     out = {
-        "status": res.status,
+        "status": res.status.name,
         "t_end_reached": float(res.t[-1]),
         "steps": steps,
         "newton_iters_per_step": res.stats.num_newton_iters / steps if steps else 0.0,
         "max_residual": res.max_residual,
-        "wall_time": wall,
+        "wall_time": run["wall"],
     }
-    if res.status != "success":
-        out["fail_t"] = res.failure["t"]
-        out["fail_step"] = res.failure["step"]
-        out["fail_dof"] = res.failure["dof"]
-        out["raised"] = getattr(res, "raised", None)
+    if res.status != nvib.Status.success:
+        out["fail_t"] = res.failure.t
+        out["fail_step"] = res.failure.step
+        out["fail_dof"] = res.failure.dof
+        out["raised"] = run["raised"]
     return out
 
 
 def _solve(model, scheme_key: str, **kw):
+    """The run with throw=False, and {"wall": its wall time, "raised": what the same run with
+    throw=True raised (None if it succeeded)}."""
     start = time.perf_counter()
     res = nvib.solve(model, SCHEMES[scheme_key](), throw=False, **kw)
-    wall = time.perf_counter() - start
-    if res.status != "success":  # the same run with throw=True: what the caller gets
+    run = {"wall": time.perf_counter() - start, "raised": None}
+    if res.status != nvib.Status.success:  # the same run with throw=True: what the caller gets
         try:
             nvib.solve(model, SCHEMES[scheme_key](), **kw)
         except nvib.NvibError as exc:
-            res.raised = {"type": type(exc).__name__, "t": exc.t, "step": exc.step, "dof": exc.dof,
-                          "residuals": len(exc.residuals), "message": str(exc)}
-    return res, wall
+            run["raised"] = {"type": type(exc).__name__, "t": exc.t, "step": exc.step, "dof": exc.dof,
+                             "residuals": len(exc.residuals), "message": str(exc)}
+    return res, run
 
 
 def pendulum(scheme_key: str, dt: float, t_end: float) -> dict:
     """Pendulum IC1 (theta0 = -0.95 pi, at rest): libration or over the top, energy error."""
-    res, wall = _solve(scene("pendulum"), scheme_key, dt=dt, t_end=t_end)
-    out = _base(res, wall)
+    res, run = _solve(scene("pendulum"), scheme_key, dt=dt, t_end=t_end)
+    out = _base(res, run)
     th, om = res.u[:, 0], res.v[:, 0]
     e = 0.5 * om ** 2 + (1.0 - np.cos(th))
     out["max_rel_energy_error"] = float(np.max(np.abs(e - e[0])) / e[0])
@@ -108,8 +111,8 @@ def pendulum(scheme_key: str, dt: float, t_end: float) -> dict:
 def hardening(scheme_key: str, omega_dt: float, t_end: float = 100.0) -> dict:
     """Hardening oscillator at dt = omega_dt / omega_tangent_max."""
     dt = omega_dt / OMEGA_TANGENT_MAX
-    res, wall = _solve(scene("hardening"), scheme_key, dt=dt, t_end=t_end)
-    out = _base(res, wall)
+    res, run = _solve(scene("hardening"), scheme_key, dt=dt, t_end=t_end)
+    out = _base(res, run)
     p = {k: HARDENING[k] for k in ("m", "k0", "a")}
     e = nvib.exact.hardening_energy(res.u[:, 0], res.v[:, 0], **p)
     out["dt"] = dt
@@ -121,8 +124,8 @@ def hardening(scheme_key: str, omega_dt: float, t_end: float = 100.0) -> dict:
 
 def long_run(scheme_key: str, nsteps: int = 10**6, dt: float = 1e-3) -> dict:
     """10^6 steps of the hardening oscillator (undamped, C++-only model), every state saved."""
-    res, wall = _solve(scene("hardening"), scheme_key, dt=dt, t_end=nsteps * dt)
-    out = _base(res, wall)
+    res, run = _solve(scene("hardening"), scheme_key, dt=dt, t_end=nsteps * dt)
+    out = _base(res, run)
     e = nvib.exact.hardening_energy(res.u[:, 0], res.v[:, 0], **{k: HARDENING[k] for k in ("m", "k0", "a")})
     err = np.abs(e - e[0]) / e[0]
     out["max_rel_energy_error"] = float(np.max(err))
@@ -140,8 +143,8 @@ def building_reference():
 
 def building(scheme_key: str, dt: float = 0.03, t_end: float = 10.0) -> dict:
     """Six-storey building at dt = 0.03 s = 0.3 Tmin: error of the top floor against the reference."""
-    res, wall = _solve(scene("building"), scheme_key, dt=dt, t_end=t_end, energy=True)
-    out = _base(res, wall)
+    res, run = _solve(scene("building"), scheme_key, dt=dt, t_end=t_end, energy=True)
+    out = _base(res, run)
     t_ref, u_ref = building_reference()
     x6 = np.interp(res.t, t_ref, u_ref[:, 5])
     out["top_floor_error"] = float(np.max(np.abs(res.u[:, 5] - x6)) / np.max(np.abs(u_ref[:, 5])))
@@ -173,8 +176,8 @@ def vehicle_without_contact():
 def vehicle(scheme_key: str, dt: float = 1e-3, t_end: float = 1.0) -> dict:
     """Railway vehicle impact: wheels leave the rail; the contact force must then be exactly 0."""
     model = scene("vehicle")
-    res, wall = _solve(model, scheme_key, dt=dt, t_end=t_end, energy=True)
-    out = _base(res, wall)
+    res, run = _solve(model, scheme_key, dt=dt, t_end=t_end, energy=True)
+    out = _base(res, run)
     t_ref, u_ref = vehicle_reference()
     w1 = np.interp(res.t, t_ref, u_ref[:, 6])
     out["wheelset1_error"] = float(np.max(np.abs(res.u[:, 6] - w1)) / np.max(np.abs(u_ref[:, 6])))

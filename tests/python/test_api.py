@@ -48,7 +48,7 @@ ALL_SCHEMES = {
     "Zhai": lambda: nvib.Zhai(0.5, 0.5),
     "CEMDTS": lambda: nvib.CEMDTS(0.45),
     "Newmark": lambda: nvib.Newmark(),
-    "Newmark-none": lambda: nvib.Newmark(iteration="none"),
+    "Newmark-one_iteration": lambda: nvib.Newmark(iteration="one_iteration"),
     "GeneralizedAlpha": lambda: nvib.GeneralizedAlpha(),
     "GeneralizedAlpha-rho0.8": lambda: nvib.GeneralizedAlpha.from_rho_inf(0.8, iteration="modified"),
     "PIM": lambda: nvib.PreciseIntegration(),
@@ -191,10 +191,12 @@ def test_effect_error_names_the_right_index():
     (lambda: nvib.Newmark(beta=-0.25), "beta"),
     (lambda: nvib.Newmark(gamma=0.4), "gamma"),
     (lambda: nvib.Newmark(iteration="foo"), "iteration"),
-    (lambda: nvib.Newmark(jacobian="complex_step"), "jacobian"),
-    (lambda: nvib.Newmark(max_iter=0), "max_iter"),
-    (lambda: nvib.Newmark(rtol=-1.0), "rtol"),
-    (lambda: nvib.Newmark(atol=float("nan")), "atol"),
+    (lambda: nvib.Newton(jacobian="complex_step"), "jacobian"),
+    (lambda: nvib.Newton(max_iter=0), "max_iter"),
+    (lambda: nvib.Newton(rtol=-1.0), "rtol"),
+    (lambda: nvib.Newton(atol=float("nan")), "atol"),
+    (lambda: nvib.Newton(rtol=0.0, atol=0.0), "rtol"),
+    (lambda: nvib.Newton(mode="none"), "mode"),
     (lambda: nvib.GeneralizedAlpha(alpha_f=0.6), "alpha_f"),
     (lambda: nvib.GeneralizedAlpha(alpha_m=0.0, alpha_f=0.0, beta=0.0), "beta"),
     (lambda: nvib.GeneralizedAlpha(alpha_m=0.0, alpha_f=0.0, gamma=0.4), "gamma"),
@@ -218,6 +220,18 @@ def test_bad_scheme_parameters(make, name):
         make()
 
 
+@pytest.mark.parametrize("make, name", [
+    (lambda: nvib.Newmark(newton="newton"), "newton"),
+    (lambda: nvib.Newmark(iteration=1), "iteration"),
+    (lambda: nvib.Newmark(iteration="newton", newton=nvib.Newton()), "iteration"),
+    (lambda: nvib.Newmark(max_iter=5), "max_iter"),
+    (lambda: nvib.Newton(max_iter=2.5), "max_iter"),
+])
+def test_scheme_parameters_of_the_wrong_type(make, name):
+    with pytest.raises(TypeError, match=rf"^{name}\b"):
+        make()
+
+
 def test_scheme_parameter_round_trip():
     ga = nvib.GeneralizedAlpha.from_rho_inf(0.8)
     assert ga.alpha_m == pytest.approx(1.0 / 3.0) and ga.alpha_f == pytest.approx(4.0 / 9.0)
@@ -231,9 +245,11 @@ def test_scheme_parameter_round_trip():
     assert (hht.alpha_m, hht.alpha_f, hht.beta, hht.gamma) == pytest.approx((0.0, 0.1, 0.3025, 0.6))
     wbz = nvib.GeneralizedAlpha.wbz(-0.1)
     assert (wbz.alpha_m, wbz.alpha_f, wbz.beta, wbz.gamma) == pytest.approx((-0.1, 0.0, 0.3025, 0.6))
-    nm = nvib.Newmark(0.3, 0.6, iteration="modified", max_iter=7, rtol=1e-8, atol=1e-9, jacobian="finite_difference")
-    assert (nm.beta, nm.gamma, nm.iteration, nm.max_iter, nm.rtol, nm.atol, nm.jacobian) == (
-        0.3, 0.6, "modified", 7, 1e-8, 1e-9, "finite_difference")
+    nw = nvib.Newton(mode="modified", max_iter=7, rtol=1e-8, atol=1e-9, jacobian="finite_difference")
+    nm = nvib.Newmark(0.3, 0.6, newton=nw)
+    assert (nm.beta, nm.gamma, nm.iteration, nm.newton.max_iter, nm.newton.rtol, nm.newton.atol,
+            nm.newton.jacobian) == (0.3, 0.6, "modified", 7, 1e-8, 1e-9, "finite_difference")
+    assert nm.newton == nw and nvib.Newmark(0.3, 0.6, iteration="modified").newton == nvib.Newton(mode="modified")
     assert nvib.CEMDTS().eta == 0.45 and nvib.Zhai().psi == 0.5 and nvib.Zhai().phi == 0.5
     pim = nvib.PreciseIntegration()
     assert (pim.squarings, pim.order, pim.corrections) == (20, 2, 1)
@@ -305,20 +321,20 @@ def stiff_model():
 def test_divergence_without_throw_returns_partial_history(name, bound):
     kw = {} if bound == "default" else {"max_displacement": math.inf}
     res = nvib.solve(stiff_model(), ALL_SCHEMES[name](), dt=0.03, t_end=100.0, throw=False, **kw)
-    assert res.status == "diverged" and not res.success
+    assert res.status == nvib.Status.diverged and not res.success
     f = res.failure
-    assert f["dof"] == 0 and 1 < f["step"] < res.num_steps_requested
-    assert f["t"] == pytest.approx(f["step"] * 0.03)
+    assert f.dof == 0 and 1 < f.step < res.num_steps_requested
+    assert f.t == pytest.approx(f.step * 0.03)
     # every step before the failed one is in the history, all finite
-    assert res.u.shape == (f["step"], 1) and len(res.t) == f["step"]
+    assert res.u.shape == (f.step, 1) and len(res.t) == f.step
     assert np.all(np.isfinite(res.u)) and np.all(np.isfinite(res.v))
     if bound == "default":  # 1e10 x max|u0| with u0 = 1: stops when |u| first exceeds 1e10
-        assert "beyond the bound 1e+10" in f["message"]
+        assert "beyond the bound 1e+10" in f.message
         assert 1.0 < np.abs(res.u[-1, 0]) <= 1e10
     else:  # no bound: runs until the state is no longer finite
-        assert "not finite" in f["message"]
+        assert "not finite" in f.message
         assert np.abs(res.u[-1, 0]) > 1e100
-    assert res.stats.num_steps == f["step"]
+    assert res.stats.num_steps == f.step
 
 
 def test_default_bound_scales_with_the_initial_state():
@@ -333,7 +349,7 @@ def test_divergence_error_carries_details():
     e = info.value
     assert isinstance(e, nvib.NvibError) and isinstance(e, RuntimeError)
     assert e.step > 1 and e.t == pytest.approx(e.step * 0.03) and e.dof == 0
-    assert e.result is not None and e.result.status == "diverged"
+    assert e.result is not None and e.result.status == nvib.Status.diverged
     assert e.result.u.shape == (e.step, 1)
     assert "diverged" in str(e)
 
@@ -341,18 +357,18 @@ def test_divergence_error_carries_details():
 def test_max_displacement_bound():
     res = nvib.solve(stiff_model(), nvib.CentralDifference(), dt=0.03, t_end=100.0, throw=False,
                      max_displacement=50.0)
-    assert res.status == "diverged"
+    assert res.status == nvib.Status.diverged
     assert np.all(np.abs(res.u) <= 50.0)
-    assert res.failure["step"] == len(res.t)
+    assert res.failure.step == len(res.t)
     # within the bound nothing happens
     ok = nvib.solve(stiff_model(), nvib.CentralDifference(), dt=0.001, t_end=1.0, max_displacement=1.5)
-    assert ok.status == "success"
+    assert ok.status == nvib.Status.success
 
 
 def test_divergence_reports_the_offending_dof():
     md = nvib.Model([1.0, 1.0, 1.0], K=np.diag([1.0, 1.0, 1e4]), u0=[1.0, 1.0, 1.0], dofs=["p", "q", "r"])
     res = nvib.solve(md, nvib.CentralDifference(), dt=0.03, t_end=100.0, throw=False)
-    assert res.status == "diverged" and res.failure["dof"] == 2
+    assert res.status == nvib.Status.diverged and res.failure.dof == 2
 
 
 def test_stable_implicit_run_of_the_same_problem_succeeds():

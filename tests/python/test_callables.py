@@ -36,11 +36,11 @@ SCHEMES = {
     "CentralDifference(half_step)": lambda **kw: nvib.CentralDifference(velocity="half_step"),
     "Zhai": lambda **kw: nvib.Zhai(0.5, 0.5),
     "CEMDTS": lambda **kw: nvib.CEMDTS(0.45),
-    "Newmark-newton": lambda **kw: nvib.Newmark(iteration="newton", **kw),
-    "Newmark-modified": lambda **kw: nvib.Newmark(iteration="modified", **kw),
-    "Newmark-none": lambda **kw: nvib.Newmark(iteration="none", **kw),
-    "GeneralizedAlpha": lambda **kw: nvib.GeneralizedAlpha(**kw),
-    "GeneralizedAlpha-rho0.8": lambda **kw: nvib.GeneralizedAlpha.from_rho_inf(0.8, **kw),
+    "Newmark-newton": lambda **kw: nvib.Newmark(newton=nvib.Newton(mode="newton", **kw)),
+    "Newmark-modified": lambda **kw: nvib.Newmark(newton=nvib.Newton(mode="modified", **kw)),
+    "Newmark-one_iteration": lambda **kw: nvib.Newmark(newton=nvib.Newton(mode="one_iteration", **kw)),
+    "GeneralizedAlpha": lambda **kw: nvib.GeneralizedAlpha(newton=nvib.Newton(**kw)),
+    "GeneralizedAlpha-rho0.8": lambda **kw: nvib.GeneralizedAlpha.from_rho_inf(0.8, newton=nvib.Newton(**kw)),
     "PIM(order=1)": lambda **kw: nvib.PreciseIntegration(order=1),
     "PIM(order=2)": lambda **kw: nvib.PreciseIntegration(order=2),
 }
@@ -119,7 +119,7 @@ class CustomError(Exception):
 
 
 ERROR_SCHEMES = ["CentralDifference", "CentralDifference(half_step)", "Zhai", "CEMDTS", "Newmark-newton",
-                 "Newmark-none", "GeneralizedAlpha", "PIM(order=2)"]
+                 "Newmark-one_iteration", "GeneralizedAlpha", "PIM(order=2)"]
 
 
 def raising_force(when):
@@ -143,7 +143,7 @@ def test_force_exception_propagates(name, when):
         st.step(100)
 
 
-@pytest.mark.parametrize("name", ["Newmark-newton", "Newmark-none", "GeneralizedAlpha", "PIM(order=2)"])
+@pytest.mark.parametrize("name", ["Newmark-newton", "Newmark-one_iteration", "GeneralizedAlpha", "PIM(order=2)"])
 def test_tangent_exception_propagates(name):
     def tangent(u, v, t):
         raise CustomError("tangent failure")
@@ -276,7 +276,7 @@ def test_overflow_of_a_diverging_run_is_divergence_not_a_callback_error():
 
     md = nvib.Model([M], force=force, u0=[1.0], uses_velocity=False, uses_time=False)
     res = nvib.solve(md, nvib.CentralDifference(), dt=0.03, t_end=100.0, throw=False)
-    assert res.status == "diverged"
+    assert res.status == nvib.Status.diverged
     with pytest.raises(nvib.DivergenceError):
         nvib.solve(md, nvib.CentralDifference(), dt=0.03, t_end=100.0)
 

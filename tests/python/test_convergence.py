@@ -40,7 +40,7 @@ SCHEMES = {
     "CEMDTS(0.45)": lambda: nvib.CEMDTS(eta=0.45),
     "CEMDTS(0.5)": lambda: nvib.CEMDTS(eta=0.5),
     "Newmark-newton": lambda: nvib.Newmark(0.25, 0.5, iteration="newton"),
-    "Newmark-none": lambda: nvib.Newmark(0.25, 0.5, iteration="none"),
+    "Newmark-one_iteration": lambda: nvib.Newmark(0.25, 0.5, iteration="one_iteration"),
     "GeneralizedAlpha-paper": lambda: nvib.GeneralizedAlpha(),
     "GeneralizedAlpha-rho0.8": lambda: nvib.GeneralizedAlpha.from_rho_inf(0.8),
     "HHT(-0.1)": lambda: nvib.GeneralizedAlpha.hht(-0.1),
@@ -72,7 +72,7 @@ def linear_errors(scheme_factory, damping: str):
     eu, ev = [], []
     for dt in DTS:
         res = nvib.solve(model, scheme_factory(), dt=dt, t_end=T_END)
-        assert res.status == "success"
+        assert res.status == nvib.Status.success
         xe, ve = nvib.exact.linear_sdof(res.t, m=M, k=K, c=c, x0=X0, v0=V0)
         eu.append(np.max(np.abs(res.u[:, 0] - xe)))
         ev.append(np.max(np.abs(res.v[:, 0] - ve)))

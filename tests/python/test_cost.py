@@ -11,7 +11,7 @@ import nvib
 
 from _cli import run_cli
 from nvib import exact
-from nvib.cost import FIELDS
+from nvib.analysis.cost import FIELDS
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -92,7 +92,7 @@ def test_a_diverged_run_is_a_row_marked_diverged_not_a_tiny_error(hardening):
 
 def test_a_newton_failure_is_reported_too():
     model = nvib.load_scene("hardening")
-    rows = nvib.cost(model, [nvib.Newmark(max_iter=1)], [1e-3], repeats=1)
+    rows = nvib.cost(model, [nvib.Newmark(newton=nvib.Newton(max_iter=1))], [1e-3], repeats=1)
     (r,) = rows
     assert r["status"] == "newton_failed" and r["max_error"] == math.inf
 
@@ -180,14 +180,14 @@ def test_cost_bad_input_names_the_argument(hardening):
 
 def test_cli_cost_writes_the_diagram_and_the_table(capsys, tmp_path):
     png, md = tmp_path / "h.png", tmp_path / "h.md"
-    code, out, _ = run_cli(capsys, "cost", "hardening", "--schemes", "cemdts", "newmark:none", "--dt", "1e-3",
+    code, out, _ = run_cli(capsys, "cost", "hardening", "--schemes", "cemdts", "newmark:one_iteration", "--dt", "1e-3",
                            "5e-4", "--scipy", "DOP853", "--rtol", "1e-6", "--repeats", "1", "--target", "1e-3",
                            "--plot", png, "--table", md)
     assert code == 0
     assert png.read_bytes()[:8] == PNG_SIGNATURE
     text = md.read_text()
     assert "reference: closed form" in text and "Cheapest run with error <= 0.001" in text
-    assert "| nvib | Newmark (none) | 0.0005 |" in text and "| scipy | SciPy DOP853 |" in text
+    assert "| nvib | Newmark (one_iteration) | 0.0005 |" in text and "| scipy | SciPy DOP853 |" in text
     assert f"wrote {md}" in out and f"wrote {png}" in out
 
 
@@ -203,8 +203,10 @@ def test_cli_cost_defaults_and_bad_input(capsys, tmp_path):
         os.chdir(cwd)
     code, _, err = run_cli(capsys, "cost", "hardening", "--schemes", "rk4")
     assert code == 2 and "--schemes" in err
-    code, _, err = run_cli(capsys, "cost", "hardening", "--schemes", "cemdts:none")
-    assert code == 2 and "only newmark and galpha" in err
+    code, _, err = run_cli(capsys, "cost", "hardening", "--schemes", "cemdts:newton")
+    assert code == 2 and "only the implicit schemes take a Newton mode" in err
+    code, _, err = run_cli(capsys, "cost", "hardening", "--schemes", "newmark:none")
+    assert code == 2 and "--schemes" in err
     code, _, err = run_cli(capsys, "cost", "hardening", "--dof", "y")
     assert code == 2 and "--dof" in err
     code, _, err = run_cli(capsys, "cost", "hardening", "--plot", str(tmp_path / "x.txt"))

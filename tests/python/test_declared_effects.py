@@ -88,9 +88,15 @@ def test_num_evaluated_effects_per_type(params, evaluated):
 
 
 def test_vehicle_without_contact_has_no_static_equilibrium():
-    # with the contacts left out nothing holds the vehicle up against gravity
-    with pytest.raises(nvib.SceneError, match="static_equilibrium"):
-        nvib.load_scene("vehicle", without=["contact"])
+    # with the contacts left out nothing holds the vehicle up against gravity: the model
+    # has no static equilibrium, so the scene starts from the full scene's and says so
+    model = nvib.load_scene("vehicle", without=["contact"])
+    with pytest.raises(nvib.ArgumentError, match="static_equilibrium did not converge") as info:
+        model.static_equilibrium()
+    assert info.value.argument == "initial"
+    np.testing.assert_array_equal(model.u0, nvib.load_scene("vehicle").u0)
+    assert model.scene["initial_u"] == "static equilibrium of the full scene"
+    assert any("static equilibrium" in note for note in model.scene["notes"])
 
 
 def test_vehicle_without_contact_is_linear(tmp_path):

@@ -299,13 +299,13 @@ def test_energy_check_arguments():
 def test_cli_max_energy_error(capsys):
     from nvib import cli
 
-    code = cli.main(["run", "vehicle", "--scheme", "cd", "--dt", "2e-3", "--energy"])
+    code = cli.main(["run", "vehicle", "--scheme", "lcdm", "--dt", "2e-3", "--energy"])
     err = capsys.readouterr().err
     assert code == 1 and "energy balance error" in err and "max_energy_error = 0.5" in err
-    code = cli.main(["run", "vehicle", "--scheme", "cd", "--dt", "2e-3", "--energy", "--max-energy-error", "inf"])
+    code = cli.main(["run", "vehicle", "--scheme", "lcdm", "--dt", "2e-3", "--energy", "--max-energy-error", "inf"])
     assert code == 0
     capsys.readouterr()
     with pytest.raises(SystemExit) as info:  # bad input: argparse's exit 2 naming the argument
-        cli.main(["run", "vehicle", "--scheme", "cd", "--max-energy-error", "0.2"])
+        cli.main(["run", "vehicle", "--scheme", "lcdm", "--max-energy-error", "0.2"])
     err = capsys.readouterr().err
     assert info.value.code == 2 and "argument --max-energy-error: needs the energy accounting" in err

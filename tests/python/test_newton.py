@@ -42,11 +42,13 @@ IMPLICIT = {
 }
 
 
-def make(name, **kw):
+def make(name, iteration="newton", **newton):
+    """The scheme ``name`` with nvib.Newton(mode=iteration, **newton)."""
     p = IMPLICIT[name]
+    nw = nvib.Newton(mode=iteration, **newton)
     if p["cls"] == "newmark":
-        return nvib.Newmark(p["beta"], p["gamma"], **kw)
-    return nvib.GeneralizedAlpha(p["am"], p["af"], p["beta"], p["gamma"], **kw)
+        return nvib.Newmark(p["beta"], p["gamma"], newton=nw)
+    return nvib.GeneralizedAlpha(p["am"], p["af"], p["beta"], p["gamma"], newton=nw)
 
 
 def quadratic_constant_bound(name):
@@ -155,7 +157,7 @@ def test_finite_difference_tangent_with_velocity_columns():
 
     ref = _runs(nvib.Model([M], force=f, tangent=tg, u0=[X0]), nvib.Newmark())
     fd = _runs(nvib.Model([M], force=f, u0=[X0]), nvib.Newmark())
-    fd2 = _runs(nvib.Model([M], force=f, tangent=tg, u0=[X0]), nvib.Newmark(jacobian="finite_difference"))
+    fd2 = _runs(nvib.Model([M], force=f, tangent=tg, u0=[X0]), nvib.Newmark(newton=nvib.Newton(jacobian="finite_difference")))
     for r in (fd, fd2):
         assert np.max(np.abs(r.u - ref.u)) <= 1e-8 * np.max(np.abs(ref.u))
         assert r.stats.num_fd_force_evals == 4 * r.stats.num_tangent_evals > 0
@@ -172,13 +174,13 @@ def test_convergence_error_carries_the_residuals(name):
     assert e.t == pytest.approx(DT)
     assert len(e.residuals) == 2  # the predictor's residual and the one after the single iteration
     assert all(math.isfinite(x) for x in e.residuals) and e.residuals[1] < e.residuals[0]
-    assert e.result is not None and e.result.status == "newton_failed"
+    assert e.result is not None and e.result.status == nvib.Status.newton_failed
     assert e.result.u.shape == (1, 1)  # only the initial state was saved
     assert "1 iteration" in str(e)
 
     res = nvib.solve(effect_model(), scheme, dt=DT, t_end=0.1, throw=False)
-    assert res.status == "newton_failed" and not res.success
-    assert res.failure["residuals"] == e.residuals
+    assert res.status == nvib.Status.newton_failed and not res.success
+    assert res.failure.residuals == e.residuals
 
     st = nvib.Stepper(effect_model(), scheme, DT)
     with pytest.raises(nvib.ConvergenceError) as info2:
@@ -204,11 +206,11 @@ def test_explicit_schemes_have_no_residuals():
 
 @pytest.mark.parametrize("name", list(IMPLICIT))
 def test_incremental_format_reports_the_residual_it_accepts(name):
-    """iteration="none" accepts each step after one solve without an equilibrium
+    """iteration="one_iteration" accepts each step after one solve without an equilibrium
     check; the residual left at the new state is evaluated and reported: in
     last_residuals (predictor's, then after the step), accepted_residual and
     Result.max_residual. Newton keeps the same measure at most rtol."""
-    st = nvib.Stepper(effect_model(), make(name, iteration="none"), DT)
+    st = nvib.Stepper(effect_model(), make(name, iteration="one_iteration"), DT)
     worst = 0.0
     for _ in range(NSTEPS):
         st.step()
@@ -216,7 +218,7 @@ def test_incremental_format_reports_the_residual_it_accepts(name):
         assert len(r) == 2 and r[1] > 0.0
         worst = max(worst, st.accepted_residual)
     assert worst > 1e-3  # a strongly nonlinear step leaves a visible unbalance
-    res = nvib.solve(effect_model(), make(name, iteration="none"), dt=DT, t_end=NSTEPS * DT)
+    res = nvib.solve(effect_model(), make(name, iteration="one_iteration"), dt=DT, t_end=NSTEPS * DT)
     assert res.max_residual == pytest.approx(worst, rel=1e-12)
     newton = nvib.solve(effect_model(), make(name, iteration="newton"), dt=DT, t_end=NSTEPS * DT)
     assert 0.0 <= newton.max_residual <= 1e-10
@@ -227,7 +229,7 @@ def test_incremental_format_reports_the_residual_it_accepts(name):
 def test_explicit_schemes_and_linear_models_report_no_residual():
     assert nvib.solve(effect_model(), nvib.CEMDTS(), dt=DT / 10, t_end=0.1).max_residual is None
     linear = nvib.Model([M], K=[[K0]], u0=[X0])
-    assert nvib.solve(linear, nvib.Newmark(iteration="none"), dt=DT, t_end=0.1).max_residual is None
+    assert nvib.solve(linear, nvib.Newmark(iteration="one_iteration"), dt=DT, t_end=0.1).max_residual is None
     st = nvib.Stepper(linear, nvib.Newmark(), DT)
     st.step()
     assert st.accepted_residual is None
@@ -255,7 +257,7 @@ def test_failures_name_time_step_and_dof(name):
         {"type": "power_damper", "measure": {"b": 1.0}, "c": 1.0, "p": 300.0},
         {"type": "spring", "measure": {"a": 1.0}, "k": 1.0}])
     # (with the paper's GaM the alpha-point tangent stays finite but spans 1e297: a SingularMatrixError)
-    for iteration in ("newton", "none") if name != "GeneralizedAlpha-paper" else ():
+    for iteration in ("newton", "one_iteration") if name != "GeneralizedAlpha-paper" else ():
         scheme = make(name, iteration=iteration)
         with pytest.raises(nvib.DivergenceError) as info:
             nvib.solve(model, scheme, dt=0.01, t_end=1.0)

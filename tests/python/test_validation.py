@@ -19,20 +19,27 @@ SCHEME_CALLS = [
     (lambda: nvib.Zhai(chi=0.5), TypeError, r"^chi: unknown parameter of Zhai \(expected psi, phi\)"),
     (lambda: nvib.CentralDifference("half_step"), TypeError, r"^CentralDifference: .* velocity must be given by name"),
     (lambda: nvib.CentralDifference(velocity=1), TypeError, r"^velocity: expected one of"),
-    (lambda: nvib.Newmark(iteration=None), TypeError, r"^iteration: expected one of 'newton', 'modified', 'none'"),
-    (lambda: nvib.Newmark(max_iter=2.0), TypeError, r"^max_iter: expected an integer, got float"),
-    (lambda: nvib.Newmark(max_iter=10**30), ValueError, r"^max_iter: out of range"),
+    (lambda: nvib.Newmark(iteration=None), TypeError,
+     r"^iteration: expected one of 'newton', 'modified', 'initial', 'incremental' or 'one_iteration', got NoneType"),
+    (lambda: nvib.Newmark(iteration="none"), ValueError, r"^iteration: 'none' is now 'one_iteration'"),
+    (lambda: nvib.Newton(max_iter=2.0), TypeError, r"^max_iter: expected an integer, got float"),
+    (lambda: nvib.Newton(max_iter=10**30), ValueError, r"^max_iter: Newton needs 1 <= max_iter <= 1000"),
+    (lambda: nvib.Newmark(max_iter=5), TypeError, r"^max_iter: unknown parameter of Newmark \(expected beta, gamma, "
+                                                  r"newton\)"),
     (lambda: nvib.Newmark(beta=10**400), ValueError, r"^beta: must be finite"),
     (lambda: nvib.Newmark(tol=1e-8), TypeError, r"^tol: unknown parameter of Newmark"),
     (lambda: nvib.GeneralizedAlpha(alpha=0.5), TypeError, r"^alpha: unknown parameter of GeneralizedAlpha"),
-    (lambda: nvib.GeneralizedAlpha(rtol="small"), TypeError, r"^rtol: expected a real number"),
+    (lambda: nvib.Newton(rtol="small"), TypeError, r"^rtol: expected a real number"),
+    (lambda: nvib.GeneralizedAlpha(newton=nvib.Newton(), iteration="newton"), TypeError, r"^iteration: give the mode"),
     (lambda: nvib.GeneralizedAlpha.from_rho_inf(), TypeError, r"^rho_inf: missing"),
     (lambda: nvib.GeneralizedAlpha.from_rho_inf(rho=0.5), TypeError, r"^rho: unknown parameter of "
                                                                        r"GeneralizedAlpha\.from_rho_inf"),
     (lambda: nvib.GeneralizedAlpha.from_rho_inf(0.5, "none"), TypeError, r"^GeneralizedAlpha\.from_rho_inf: takes "
-                                                                         r"at most 1 positional argument"),
+                                                                         r"1 positional argument \(rho_inf\), got 2"),
     (lambda: nvib.GeneralizedAlpha.hht(None), TypeError, r"^alpha: expected a real number"),
-    (lambda: nvib.GeneralizedAlpha.wbz(-0.1, jacobian=3), TypeError, r"^jacobian: expected one of"),
+    (lambda: nvib.GeneralizedAlpha.wbz(-0.1, jacobian=3), TypeError, r"^jacobian: unknown parameter of "
+                                                                      r"GeneralizedAlpha\.wbz"),
+    (lambda: nvib.GeneralizedAlpha.wbz(-0.1, newton=nvib.Newton(jacobian=3)), TypeError, r"^jacobian: expected one of"),
     (lambda: nvib.PreciseIntegration(order=2.0), TypeError, r"^order: expected an integer, got float"),
     (lambda: nvib.PreciseIntegration(20), TypeError, r"^PreciseIntegration: takes at most 0 positional"),
     (lambda: nvib.PreciseIntegration(steps=3), TypeError, r"^steps: unknown parameter of PreciseIntegration"),
@@ -51,13 +58,15 @@ def test_scheme_classes_keep_their_behaviour():
         (nvib.CEMDTS(0.3), nvib._core.CEMDTS(0.3)),
         (nvib.Zhai(0.6, 0.7), nvib._core.Zhai(0.6, 0.7)),
         (nvib.CentralDifference(velocity="half_step"), nvib._core.CentralDifference(velocity="half_step")),
-        (nvib.Newmark(0.3, 0.6, iteration="modified", max_iter=7, rtol=1e-8, atol=1e-9, jacobian="finite_difference"),
-         nvib._core.Newmark(0.3, 0.6, iteration="modified", max_iter=7, rtol=1e-8, atol=1e-9,
-                            jacobian="finite_difference")),
-        (nvib.GeneralizedAlpha.from_rho_inf(0.8, iteration="none"),
-         nvib._core.GeneralizedAlpha.from_rho_inf(0.8, iteration="none")),
+        (nvib.Newmark(0.3, 0.6, newton=nvib.Newton(mode="modified", max_iter=7, rtol=1e-8, atol=1e-9,
+                                                   jacobian="finite_difference")),
+         nvib._core.Newmark(0.3, 0.6, newton=nvib._core.Newton(mode="modified", max_iter=7, rtol=1e-8, atol=1e-9,
+                                                               jacobian="finite_difference"))),
+        (nvib.GeneralizedAlpha.from_rho_inf(0.8, iteration="one_iteration"),
+         nvib._core.GeneralizedAlpha.from_rho_inf(0.8, iteration="one_iteration")),
         (nvib.GeneralizedAlpha.hht(-0.1), nvib._core.GeneralizedAlpha.hht(-0.1)),
-        (nvib.GeneralizedAlpha.wbz(-0.2, max_iter=5), nvib._core.GeneralizedAlpha.wbz(-0.2, max_iter=5)),
+        (nvib.GeneralizedAlpha.wbz(-0.2, newton=nvib.Newton(max_iter=5)),
+         nvib._core.GeneralizedAlpha.wbz(-0.2, newton=nvib._core.Newton(max_iter=5))),
         (nvib.PreciseIntegration(order=3, corrections=2), nvib._core.PreciseIntegration(order=3, corrections=2)),
     ]
     model = nvib.Model([1.0], effects=[{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": 100.0, "a": 30.0}],
@@ -152,7 +161,7 @@ def test_default_divergence_bound_is_the_cpp_one():
     assert nvib.default_max_displacement(3.0, 0.0, 1.0) == 3e10
     model = nvib.Model([1.0], K=[[1e4]], u0=[2.0], dofs=["x"])
     res = nvib.solve(model, nvib.CentralDifference(), dt=0.03, t_end=100.0, throw=False)
-    assert "beyond the bound 2e+10" in res.failure["message"]
+    assert "beyond the bound 2e+10" in res.failure.message
 
 
 @pytest.mark.parametrize("args, error, match", [

@@ -202,10 +202,10 @@ def _nvib_row(model, scheme, dt, t_end, cols, names, ref, repeats, long_run, wit
     counters = dict(num_steps=stats.num_steps, force_evals=stats.num_force_evals,
                     tangent_evals=stats.num_tangent_evals, newton_iters=stats.num_newton_iters,
                     factorizations=stats.num_factorizations)
-    if res.status != "success":
-        msg = str((res.failure or {}).get("message", res.status))
+    if not res.success:
+        msg = res.failure.message if res.failure is not None else res.status.name
         return _row(**base, **counters, max_error=INF, energy_error=INF if with_energy else NAN, wall_time=first,
-                    repeats=1, status=res.status, message=msg)
+                    repeats=1, status=res.status.name, message=msg)
     err = _error(res.t, res.u, ref, cols)
     e_err = NAN
     if with_energy:

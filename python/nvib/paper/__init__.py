@@ -15,8 +15,8 @@ the paper with the paper's schemes and writes into ``outdir``:
 Schemes, with the paper's settings (PAPER.md): LCDM with synchronized and
 with half-step velocity (same displacements, different velocities); CEMDTS(0.45);
 Newmark(1/4, 1/2) and GαM = GeneralizedAlpha(1/2, 1/2, 1/4, 1/2), each in the
-paper's incremental format (iteration 'none': one linearised solve per step)
-and with full Newton iteration; PIM (20 squarings, order 2, 1 correction).
+one-iteration format (iteration 'one_iteration': one Newton iteration on the
+full residual per step, accepted as is) and with full Newton iteration; PIM (20 squarings, order 2, 1 correction).
 
 Measures (one row per run):
 

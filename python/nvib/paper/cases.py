@@ -169,7 +169,7 @@ def measure(s: Setting, scheme, *, repeats: int = 3, case: str = "", claim: str 
     u, v = res.u[:, s.col], res.v[:, s.col]
     out = {k: math.nan for k in RUN_FIELDS}
     out.update(case=case, claim=claim, scene=s.model.scene["name"], scheme=scheme_label(scheme), dt=s.dt,
-               t_end=s.t_end, dof=s.dof, status=res.status, max_error=row["max_error"], wall_time=row["wall_time"],
+               t_end=s.t_end, dof=s.dof, status=res.status.name, max_error=row["max_error"], wall_time=row["wall_time"],
                force_evals=res.stats.num_force_evals, reference=s.ref.description, t_over_the_top="")
     with np.errstate(all="ignore"):
         if s.conservative:
@@ -178,7 +178,7 @@ def measure(s: Setting, scheme, *, repeats: int = 3, case: str = "", claim: str 
             out["energy_end_over_start"] = float(e[-1] / e[0])
         else:
             out["energy_error"] = float(res.energy.relative_balance_error())
-    if s.orbit is not None and res.status == "success":
+    if s.orbit is not None and res.success:
         out["locus_error"] = float(np.max(s.orbit.distance(u, v)))
         ur, vr = s.ref(res.t)
         out["state_error"] = float(np.max(np.hypot((u - ur[:, s.col]) / s.orbit.scale[0],

@@ -48,6 +48,7 @@ class Mass {
   bool is_diagonal() const { return diag_; }
   Index size() const { return d_.size(); }
   const Vector& diagonal_entries() const { return d_; }
+  double entry(Index i, Index j) const { return diag_ ? (i == j ? d_[i] : 0.0) : M_(i, j); }
 
   Matrix matrix() const {
     if (diag_) return d_.asDiagonal();

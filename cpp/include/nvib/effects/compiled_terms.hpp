@@ -122,20 +122,39 @@ inline Kernel kernel_for(Law law, Storage s) {
   });
 }
 
-// K += df/dd g g^T, C += df/dd' g g^T for every term of the group.
+// K += df/dd g g^T, C += df/dd' g g^T for every term of the group (K, C
+// column-major with leading dimension ld). One or two entries are written
+// directly; longer measures loop over their list, in its order.
 template <class L>
-void add_tangents(const Arrays& a, const Group& g, const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
+void add_tangents(const Arrays& a, const Group& g, const double* u, const double* v, double t, double* K, double* C,
+                  Index ld) {
   if constexpr (L::is_load) return;  // loads do not depend on the state
+  double* A = L::uses_velocity ? C : K;
+  const double* x = L::uses_velocity ? v : u;
+  auto slope = [&](const Term& c, double d) {
+    if constexpr (L::uses_velocity)
+      return L::damping(c.p, d);
+    else
+      return L::stiffness(c.p, d, t);
+  };
   for (const Term* c = g.begin; c != g.end; ++c) {
-    const double kd = uses_displacement<L>() ? L::stiffness(c->p, a.measure(*c, u), t) : 0.0;
-    const double cd = L::uses_velocity ? L::damping(c->p, a.measure(*c, v)) : 0.0;
-    if (kd == 0.0 && cd == 0.0) continue;
-    MatRef& A = L::uses_velocity ? C : K;
-    const double s = L::uses_velocity ? cd : kd;
-    for (std::int32_t i = c->first; i < c->last; ++i)
-      for (std::int32_t j = c->first; j < c->last; ++j)
-        A(a.idx[static_cast<size_t>(i)], a.idx[static_cast<size_t>(j)]) +=
-            s * a.coef[static_cast<size_t>(i)] * a.coef[static_cast<size_t>(j)];
+    if (g.storage == unit) {
+      A[c->i0 + c->i0 * ld] += slope(*c, x[c->i0]);
+    } else if (g.storage == difference) {
+      const double s = slope(*c, x[c->i0] - x[c->i1]);
+      if (s == 0.0) continue;
+      A[c->i0 + c->i0 * ld] += s;
+      A[c->i0 + c->i1 * ld] -= s;
+      A[c->i1 + c->i0 * ld] -= s;
+      A[c->i1 + c->i1 * ld] += s;
+    } else {
+      const double s = slope(*c, a.measure(*c, x));
+      if (s == 0.0) continue;
+      for (std::int32_t i = c->first; i < c->last; ++i)
+        for (std::int32_t j = c->first; j < c->last; ++j)
+          A[a.idx[static_cast<size_t>(i)] + a.idx[static_cast<size_t>(j)] * ld] +=
+              s * a.coef[static_cast<size_t>(i)] * a.coef[static_cast<size_t>(j)];
+    }
   }
 }
 

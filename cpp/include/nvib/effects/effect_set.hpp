@@ -98,10 +98,17 @@ class EffectSet {
     for (; g != groups_.end(); ++g) g->kernel(a_, *g, up, vp, t, op);
   }
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) const {
-    K.setZero();
-    C.setZero();
+    double *k = K.data(), *c = C.data();
+    const Index ld = K.outerStride();
+    if (ld == K.rows() && C.outerStride() == ld) {  // contiguous: one fill each
+      std::fill_n(k, K.size(), 0.0);
+      std::fill_n(c, C.size(), 0.0);
+    } else {
+      K.setZero();
+      C.setZero();
+    }
     for (const compiled::Group& g : groups_)
-      dispatch(g.law, [&](auto L) { compiled::add_tangents<decltype(L)>(a_, g, u, v, t, K, C); });
+      dispatch(g.law, [&](auto L) { compiled::add_tangents<decltype(L)>(a_, g, u.data(), v.data(), t, k, c, ld); });
   }
   // out_i = |constant loads|_i + sum over terms of |g_i f|: the round-off scale of the force.
   void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -32,6 +33,7 @@ class DenseLU {
     } else {
       big_ = Eigen::PartialPivLU<Matrix>(n);
       work_big_.resize(n);
+      work_mat_.resize(n, n);
     }
   }
 
@@ -44,9 +46,20 @@ class DenseLU {
       const double mx = d.maxCoeff();
       return ok_ = std::isfinite(mx) && mx > 0.0 && d.minCoeff() > 1e-14 * mx;
     }
-    const Index n = n_;
     lu_ = A;
-    double* a = lu_.data();  // column-major: a[i + j n] = A(i, j)
+    return factorize_in_place();
+  }
+
+  // The storage to assemble the matrix in, then factorize_assembled(): no copy.
+  Matrix& assembly() { return n_ > kUnblockedMax ? work_mat_ : lu_; }
+  bool factorize_assembled() { return n_ > kUnblockedMax ? compute(work_mat_) : factorize_in_place(); }
+
+ private:
+  // The kernels, for a size known at compile time (N > 0: the loops unroll,
+  // as in a hand-written solver of that size) or at run time (N = 0).
+  template <int N>
+  static bool factor(double* a, Index* perm, Index n_run) {
+    const Index n = N > 0 ? N : n_run;  // column-major: a[i + j n] = A(i, j)
     double dmax = 0.0, dmin = std::numeric_limits<double>::infinity();
     for (Index k = 0; k < n; ++k) {
       // pivot: the largest |a(i, k)| for i >= k
@@ -59,11 +72,11 @@ class DenseLU {
           p = i;
         }
       }
-      perm_[static_cast<size_t>(k)] = p;
+      perm[k] = p;
       if (p != k)
         for (Index j = 0; j < n; ++j) std::swap(a[k + j * n], a[p + j * n]);
       const double pivot = a[k + k * n];
-      if (!(best > 0.0) || !std::isfinite(best)) return ok_ = false;
+      if (!(best > 0.0) || !std::isfinite(best)) return false;
       dmax = std::max(dmax, best);
       dmin = std::min(dmin, best);
       const double inv = 1.0 / pivot;
@@ -76,23 +89,14 @@ class DenseLU {
         for (Index i = k + 1; i < n; ++i) colj[i] -= colk[i] * akj;
       }
     }
-    return ok_ = dmin > 1e-14 * dmax;
+    return dmin > 1e-14 * dmax;
   }
 
-  bool ok() const { return ok_; }
-
-  // x <- A^{-1} x
-  void solve_in_place(Vector& x) const {
-    if (n_ > kUnblockedMax) {
-      work_big_ = x;
-      x.noalias() = big_.solve(work_big_);
-      return;
-    }
-    const Index n = n_;
-    const double* a = lu_.data();
-    double* b = x.data();
+  template <int N>
+  static void substitute(const double* a, const Index* perm, double* b, Index n_run) {
+    const Index n = N > 0 ? N : n_run;
     for (Index k = 0; k < n; ++k) {
-      const Index p = perm_[static_cast<size_t>(k)];
+      const Index p = perm[k];
       if (p != k) std::swap(b[k], b[p]);
     }
     for (Index j = 0; j < n; ++j) {  // L y = P b, unit diagonal, by columns
@@ -109,6 +113,44 @@ class DenseLU {
     }
   }
 
+  // f(std::integral_constant<int, N>) with N = n for n <= 8, else N = 0.
+  template <class F>
+  decltype(auto) by_size(F&& f) const {
+    switch (n_) {
+      case 1: return f(std::integral_constant<int, 1>{});
+      case 2: return f(std::integral_constant<int, 2>{});
+      case 3: return f(std::integral_constant<int, 3>{});
+      case 4: return f(std::integral_constant<int, 4>{});
+      case 5: return f(std::integral_constant<int, 5>{});
+      case 6: return f(std::integral_constant<int, 6>{});
+      case 7: return f(std::integral_constant<int, 7>{});
+      case 8: return f(std::integral_constant<int, 8>{});
+      default: return f(std::integral_constant<int, 0>{});
+    }
+  }
+
+  bool factorize_in_place() {
+    double* a = lu_.data();
+    Index* perm = perm_.data();
+    return ok_ = by_size([&](auto N) { return factor<decltype(N)::value>(a, perm, n_); });
+  }
+
+ public:
+  bool ok() const { return ok_; }
+
+  // x <- A^{-1} x
+  void solve_in_place(Vector& x) const {
+    if (n_ > kUnblockedMax) {
+      work_big_ = x;
+      x.noalias() = big_.solve(work_big_);
+      return;
+    }
+    const double* a = lu_.data();
+    const Index* perm = perm_.data();
+    double* b = x.data();
+    by_size([&](auto N) { substitute<decltype(N)::value>(a, perm, b, n_); });
+  }
+
  private:
   Index n_ = 0;
   bool ok_ = false;
@@ -116,6 +158,7 @@ class DenseLU {
   std::vector<Index> perm_;
   Eigen::PartialPivLU<Matrix> big_;
   mutable Vector work_big_;
+  Matrix work_mat_;  // the assembly storage above kUnblockedMax
 };
 
 }  // namespace nvib

@@ -28,17 +28,29 @@ class DenseLinearSolver {
   void resize(Index n) {
     Kt_.setZero(n, n);
     Ct_.setZero(n, n);
-    S_.setZero(n, n);
     lu_.resize(n);
   }
 
+  // S = (cK K_t + cM M) + cC C_t, assembled in the factorisation's own storage.
   template <class ModelT>
   bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference) {
     model.tangent(*im.u, *im.v, im.t, Kt_, Ct_, st, finite_difference);
-    S_ = im.cK * Kt_;
-    model.mass().add_to(S_, im.cM);
-    if (model.uses_velocity()) S_.noalias() += im.cC * Ct_;
-    return lu_.compute(S_);
+    Matrix& S = lu_.assembly();
+    const Index n = S.rows();
+    const double *K = Kt_.data(), *C = Ct_.data();
+    double* out = S.data();
+    const Mass& mass = model.mass();
+    for (Index ij = 0; ij < n * n; ++ij) out[ij] = im.cK * K[ij];
+    if (mass.is_diagonal()) {
+      const double* m = mass.diagonal_entries().data();
+      for (Index i = 0; i < n; ++i) out[i + i * n] += im.cM * m[i];
+    } else {
+      for (Index j = 0; j < n; ++j)
+        for (Index i = 0; i < n; ++i) out[i + j * n] += im.cM * mass.entry(i, j);
+    }
+    if (model.uses_velocity())
+      for (Index ij = 0; ij < n * n; ++ij) out[ij] += im.cC * C[ij];
+    return lu_.factorize_assembled();
   }
 
   void solve_in_place(Vector& x) const { lu_.solve_in_place(x); }
@@ -53,7 +65,7 @@ class DenseLinearSolver {
   }
 
  private:
-  Matrix Kt_, Ct_, S_;
+  Matrix Kt_, Ct_;
   DenseLU lu_;
 };
 
