@@ -41,21 +41,41 @@ def forced_model() -> nvib.Model:
     ], dofs=["x"], u0=[X0], v0=[V0])
 
 
+def free_model(damping: str) -> nvib.Model:
+    """The free linear oscillator (the forced one without its load): damping 'none', 'matrix' (a C
+    matrix) or 'damper' (a damper effect)."""
+    if damping == "none":
+        return nvib.Model([M], K=[[K]], u0=[X0], v0=[V0])
+    if damping == "matrix":
+        return nvib.Model([M], K=[[K]], C=[[C]], u0=[X0], v0=[V0])
+    assert damping == "damper", damping
+    return nvib.Model([M], effects=[{"type": "spring", "measure": {"x": 1.0}, "k": K},
+                                    {"type": "damper", "measure": {"x": 1.0}, "c": C}],
+                      dofs=["x"], u0=[X0], v0=[V0])
+
+
 def hardening_model() -> nvib.Model:
     return nvib.Model([HM], effects=[{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": HK0, "a": HA}],
                       dofs=["x"], u0=[HX0])
 
 
 def errors(problem: str, scheme, *, refine: int = 0) -> tuple[np.ndarray, np.ndarray, tuple]:
-    """Max errors of u and v over the run for each step of the problem ('forced' or 'hardening');
-    refine halves the steps that many times (for schemes whose asymptotic regime starts later)."""
-    model, dts, t_end = ((forced_model(), LINEAR_DTS, LINEAR_T_END) if problem == "forced"
-                         else (hardening_model(), H_DTS, H_T_END))
+    """Max errors of u and v over the run for each step of the problem ('forced', 'hardening', or the free
+    linear oscillator 'free-none', 'free-matrix', 'free-damper'); refine halves the steps that many times
+    (for schemes whose asymptotic regime starts later)."""
+    if problem.startswith("free-"):
+        model, dts, t_end = free_model(problem[5:]), LINEAR_DTS, LINEAR_T_END
+    elif problem == "forced":
+        model, dts, t_end = forced_model(), LINEAR_DTS, LINEAR_T_END
+    else:
+        model, dts, t_end = hardening_model(), H_DTS, H_T_END
     dts = tuple(dt / 2 ** refine for dt in dts)
     eu, ev = [], []
     for dt in dts:
         res = nvib.solve(model, scheme, dt=dt, t_end=t_end)
-        if problem == "forced":
+        if problem.startswith("free-"):
+            xe, ve = nvib.exact.linear_sdof(res.t, m=M, k=K, c=0.0 if problem == "free-none" else C, x0=X0, v0=V0)
+        elif problem == "forced":
             xe, ve = nvib.exact.forced_linear_sdof(res.t, m=M, k=K, c=C, x0=X0, v0=V0, **LOAD)
         else:
             xe, ve = nvib.exact.hardening(res.t, m=HM, k0=HK0, a=HA, x0=HX0)

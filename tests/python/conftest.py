@@ -1,4 +1,5 @@
-"""Fixtures shared by the tests: the scheme registry, as the C++ core declares it."""
+"""Fixtures shared by the tests: the scheme registry, as the C++ core declares it
+(see _registry.py for the schemes and variants that "every scheme" tests run)."""
 
 from __future__ import annotations
 

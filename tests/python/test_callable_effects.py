@@ -8,6 +8,8 @@ import pytest
 
 import nvib
 
+from _registry import scheme_variants
+
 K0, A = 100.0, 30.0
 
 
@@ -29,19 +31,13 @@ BUILTIN = {"type": "hardening_spring", "measure": {"x2": 1.0, "x1": -1.0}, "k0":
 CALLABLE = {"type": "callable", "measure": {"x2": 1.0, "x1": -1.0}, "law": hardening_law,
             "tangent": hardening_tangent, "uses_velocity": False, "uses_time": False}
 
-SCHEMES = {
-    "cd": lambda: nvib.CentralDifference(),
-    "cemdts": lambda: nvib.CEMDTS(0.45),
-    "newmark": lambda: nvib.Newmark(),
-    "galpha": lambda: nvib.GeneralizedAlpha(),
-    "pim": lambda: nvib.PreciseIntegration(),
-}
+SCHEMES = scheme_variants()
 
 
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_callable_law_matches_the_builtin_effect(scheme):
-    ref = nvib.solve(two_mass(BUILTIN), SCHEMES[scheme](), dt=1e-3, t_end=0.5)
-    got = nvib.solve(two_mass(CALLABLE), SCHEMES[scheme](), dt=1e-3, t_end=0.5)
+    ref = nvib.solve(two_mass(BUILTIN), SCHEMES[scheme], dt=1e-3, t_end=0.5)
+    got = nvib.solve(two_mass(CALLABLE), SCHEMES[scheme], dt=1e-3, t_end=0.5)
     np.testing.assert_allclose(got.u, ref.u, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(got.v, ref.v, rtol=1e-12, atol=1e-13)
     assert got.stats.num_force_evals == ref.stats.num_force_evals

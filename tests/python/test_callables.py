@@ -8,6 +8,8 @@ import pytest
 
 import nvib
 
+from _registry import is_implicit, scheme_variants, with_newton
+
 M, K0, A, X0 = 1.0, 100.0, 30.0, 1.5
 DT, T_END = 1e-3, 0.5
 
@@ -31,21 +33,10 @@ def callable_model(with_tangent: bool, **flags):
                       **flags)
 
 
-SCHEMES = {
-    "CentralDifference": lambda **kw: nvib.CentralDifference(),
-    "CentralDifference(half_step)": lambda **kw: nvib.CentralDifference(velocity="half_step"),
-    "Zhai": lambda **kw: nvib.Zhai(0.5, 0.5),
-    "CEMDTS": lambda **kw: nvib.CEMDTS(0.45),
-    "Newmark-newton": lambda **kw: nvib.Newmark(newton=nvib.Newton(mode="newton", **kw)),
-    "Newmark-modified": lambda **kw: nvib.Newmark(newton=nvib.Newton(mode="modified", **kw)),
-    "Newmark-one_iteration": lambda **kw: nvib.Newmark(newton=nvib.Newton(mode="one_iteration", **kw)),
-    "GeneralizedAlpha": lambda **kw: nvib.GeneralizedAlpha(newton=nvib.Newton(**kw)),
-    "GeneralizedAlpha-rho0.8": lambda **kw: nvib.GeneralizedAlpha.from_rho_inf(0.8, newton=nvib.Newton(**kw)),
-    "PIM(order=1)": lambda **kw: nvib.PreciseIntegration(order=1),
-    "PIM(order=2)": lambda **kw: nvib.PreciseIntegration(order=2),
-}
-IMPLICIT = {k for k in SCHEMES if k.startswith(("Newmark", "GeneralizedAlpha"))}
-PIM = {k for k in SCHEMES if k.startswith("PIM")}
+SCHEMES = scheme_variants()
+# The schemes that take tangents (implicit ones, and PIM for its linear part), as a short run shows.
+TANGENT_USERS = [name for name, s in SCHEMES.items()
+                 if nvib.solve(effect_model(), s, dt=DT, t_end=10 * DT).stats.num_tangent_evals > 0]
 
 
 def assert_same(r, ref, rel, what):
@@ -59,8 +50,8 @@ def assert_same(r, ref, rel, what):
 @pytest.mark.parametrize("flags", [{}, {"uses_velocity": False, "uses_time": False}], ids=["default", "flags-off"])
 @pytest.mark.parametrize("name", list(SCHEMES))
 def test_callable_with_tangent_matches_effect(name, flags):
-    ref = nvib.solve(effect_model(), SCHEMES[name](), dt=DT, t_end=T_END)
-    r = nvib.solve(callable_model(True, **flags), SCHEMES[name](), dt=DT, t_end=T_END)
+    ref = nvib.solve(effect_model(), SCHEMES[name], dt=DT, t_end=T_END)
+    r = nvib.solve(callable_model(True, **flags), SCHEMES[name], dt=DT, t_end=T_END)
     assert_same(r, ref, 1e-12, name)
     assert r.stats.num_force_evals == ref.stats.num_force_evals
     assert r.stats.num_fd_force_evals == 0
@@ -74,13 +65,14 @@ def test_callable_without_tangent_matches_effect(name):
     PIM's linear part is the tangent at the origin, whose central difference
     k0 (1 + a h^2), h = eps^(1/3), is off by a h^2 ~ 1e-9 relative, which only
     moves the linear/nonlinear split: allow 1e-9 relative there."""
-    kw = {"jacobian": "finite_difference"} if name in IMPLICIT else {}
-    ref = nvib.solve(effect_model(), SCHEMES[name](**kw), dt=DT, t_end=T_END)
-    r = nvib.solve(callable_model(False, uses_velocity=False, uses_time=False), SCHEMES[name](), dt=DT, t_end=T_END)
-    assert_same(r, ref, 1e-9 if name in PIM else 1e-12, name)
-    explicit = name not in IMPLICIT and name not in PIM
-    assert (r.stats.num_fd_force_evals > 0) == (not explicit)
-    if explicit:
+    scheme = SCHEMES[name]
+    ref = nvib.solve(effect_model(), with_newton(scheme, jacobian="finite_difference"), dt=DT, t_end=T_END)
+    r = nvib.solve(callable_model(False, uses_velocity=False, uses_time=False), scheme, dt=DT, t_end=T_END)
+    split_only = name in TANGENT_USERS and not is_implicit(scheme)  # PIM: the tangent sets the linear part
+    assert_same(r, ref, 1e-9 if split_only else 1e-12, name)
+    # every tangent a scheme takes is then a finite difference; a scheme without tangents takes none
+    assert (r.stats.num_fd_force_evals > 0) == (name in TANGENT_USERS)
+    if name not in TANGENT_USERS:
         assert r.stats.num_tangent_evals == 0
 
 
@@ -106,9 +98,9 @@ def test_multi_dof_callable_matches_effects():
     K = np.array([[200.0, 0.0], [0.0, 0.0]])
     C = np.array([[0.4, -0.4], [-0.4, 0.4]])
     mc = nvib.Model([1.0, 0.5], K=K, C=C, force=force, tangent=tangent, u0=[0.1, 0.4], uses_velocity=False)
-    for name in ("CentralDifference", "CEMDTS", "Newmark-newton", "GeneralizedAlpha", "PIM(order=2)"):
-        ref = nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
-        r = nvib.solve(mc, SCHEMES[name](), dt=DT, t_end=T_END)
+    for name in SCHEMES:
+        ref = nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
+        r = nvib.solve(mc, SCHEMES[name], dt=DT, t_end=T_END)
         # the load is summed in another order than in C++: round-off only
         assert_same(r, ref, 1e-11, name)
 
@@ -118,8 +110,7 @@ class CustomError(Exception):
     pass
 
 
-ERROR_SCHEMES = ["CentralDifference", "CentralDifference(half_step)", "Zhai", "CEMDTS", "Newmark-newton",
-                 "Newmark-one_iteration", "GeneralizedAlpha", "PIM(order=2)"]
+ERROR_SCHEMES = list(SCHEMES)
 
 
 def raising_force(when):
@@ -135,22 +126,22 @@ def raising_force(when):
 def test_force_exception_propagates(name, when):
     md = nvib.Model([M], force=raising_force(when), tangent=hardening_tangent, u0=[X0])
     with pytest.raises(CustomError, match=r"^custom failure at t=") as info:
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
     assert type(info.value) is CustomError
     # also through the Stepper
     with pytest.raises(CustomError):
-        st = nvib.Stepper(md, SCHEMES[name](), DT)
+        st = nvib.Stepper(md, SCHEMES[name], DT)
         st.step(100)
 
 
-@pytest.mark.parametrize("name", ["Newmark-newton", "Newmark-one_iteration", "GeneralizedAlpha", "PIM(order=2)"])
+@pytest.mark.parametrize("name", TANGENT_USERS)
 def test_tangent_exception_propagates(name):
     def tangent(u, v, t):
         raise CustomError("tangent failure")
 
     md = nvib.Model([M], force=hardening_force, tangent=tangent, u0=[X0])
     with pytest.raises(CustomError, match=r"^tangent failure$"):
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
 
 
 @pytest.mark.parametrize("name", ERROR_SCHEMES)
@@ -162,7 +153,7 @@ def test_zero_division_in_force_propagates(name):
 
     md = nvib.Model([M], force=force, tangent=hardening_tangent, u0=[X0])
     with pytest.raises(ZeroDivisionError):
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
 
 
 def test_zero_division_in_tangent_propagates():
@@ -183,7 +174,7 @@ def test_keyboard_interrupt_in_force_propagates(name):
 
     md = nvib.Model([M], force=force, tangent=hardening_tangent, u0=[X0])
     with pytest.raises(KeyboardInterrupt):
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
 
 
 def test_keyboard_interrupt_in_tangent_propagates():
@@ -202,12 +193,12 @@ BAD_SHAPES = {
 }
 
 
-@pytest.mark.parametrize("name", ["CentralDifference", "Newmark-newton", "PIM(order=2)"])
+@pytest.mark.parametrize("name", list(SCHEMES))
 @pytest.mark.parametrize("bad", list(BAD_SHAPES))
 def test_wrong_shape_raises_value_error(bad, name):
     md = nvib.Model([M], force=BAD_SHAPES[bad], tangent=hardening_tangent, u0=[X0])
     with pytest.raises(ValueError, match="force"):
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
 
 
 def test_wrong_shape_multi_dof_and_later_in_the_run():
@@ -227,11 +218,11 @@ def test_wrong_tangent_shape_raises_value_error():
 
 @pytest.mark.parametrize("value", [np.array([1.0 + 2.0j]), np.array(["a"]), np.array([b"x"]), "abc"],
                          ids=["complex", "str-array", "bytes-array", "str"])
-@pytest.mark.parametrize("name", ["CentralDifference", "Newmark-newton"])
+@pytest.mark.parametrize("name", list(SCHEMES))
 def test_non_real_return_raises_type_error(value, name):
     md = nvib.Model([M], force=lambda u, v, t: value, tangent=hardening_tangent, u0=[X0])
     with pytest.raises(TypeError, match="force"):
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
 
 
 def test_none_return_raises_type_error():
@@ -251,14 +242,14 @@ def test_list_and_integer_returns_are_accepted():
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
-@pytest.mark.parametrize("name", ["CentralDifference", "Zhai", "Newmark-newton", "PIM(order=2)"])
+@pytest.mark.parametrize("name", list(SCHEMES))
 def test_non_finite_at_a_normal_state_raises_value_error(name, bad):
     def force(u, v, t):
         return np.array([bad]) if t > 0.01 else hardening_force(u, v, t)
 
     md = nvib.Model([M], force=force, tangent=hardening_tangent, u0=[X0])
     with pytest.raises(ValueError, match="non-finite"):
-        nvib.solve(md, SCHEMES[name](), dt=DT, t_end=T_END)
+        nvib.solve(md, SCHEMES[name], dt=DT, t_end=T_END)
 
 
 def test_non_finite_tangent_raises_value_error():

@@ -15,14 +15,7 @@ from _cli import run_cli
 from nvib._progress import ProgressBar, format_duration
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-SCHEMES = {
-    "lcdm": nvib.CentralDifference(),
-    "cemdts": nvib.CEMDTS(0.45),
-    "zhai": nvib.Zhai(0.5, 0.5),
-    "newmark": nvib.Newmark(0.25, 0.5),
-    "galpha": nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5),
-    "pim": nvib.PreciseIntegration(),
-}
+SCHEMES = {key: cls() for key, cls in nvib.schemes().items()}  # each registry key with its defaults
 
 
 

@@ -19,6 +19,8 @@ from nvib.cli import cost as cli_cost
 from nvib.cli import demo as cli_demo
 from nvib.cli._common import scheme_options
 
+from _registry import VARIANTS, scheme_variants, with_newton
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
@@ -108,3 +110,14 @@ def test_the_cpp_tests_are_typed_over_the_registry():
         assert "nvib::AllSchemes::for_each" in fh.read()
     with open(os.path.join(ROOT, "tests", "cpp", "CMakeLists.txt"), encoding="utf-8") as fh:
         assert "test_registry" in fh.read()
+
+
+def test_the_helpers_follow_the_registry():
+    ids = scheme_variants()
+    for key, cls in nvib.schemes().items():
+        assert type(ids[cls.__name__]) is cls and ids[cls.__name__] == cls()
+    assert set(scheme_variants(explicit=True)) | set(scheme_variants(explicit=False)) == set(ids)
+    assert all(key in nvib.schemes() for key in VARIANTS)
+    nm = with_newton(nvib.Newmark(0.3, 0.6, iteration="modified"), jacobian="finite_difference")
+    assert nm == nvib.Newmark(0.3, 0.6, newton=nvib.Newton(mode="modified", jacobian="finite_difference"))
+    assert with_newton(nvib.CEMDTS(0.2), max_iter=3) == nvib.CEMDTS(0.2)
