@@ -6,8 +6,10 @@
 // binding; it is also the driver to profile (valgrind --tool=callgrind). It
 // also runs the same schemes on the hand-written force given as a C++ functor.
 //
-// Usage: building_nvib DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...]
+// Usage: building_nvib DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...] [--implicit]
 // Output: one JSON object per (scheme, save_every) line, as building_loop.
+// With --implicit: Newmark and the paper's generalized-alpha with full Newton
+// instead (benchmarks/implicit.py), with the Newton counters.
 //
 // Build: g++ -std=c++17 -O3 -DNDEBUG -I<nvib>/cpp/include -I<eigen3> building_nvib.cpp -o building_nvib
 #include <algorithm>
@@ -15,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 #include <nvib/nvib.hpp>
@@ -52,6 +55,23 @@ struct HandForce {
     const double mag = 1e5 * 10.0 * std::sin(3.141592653589793 * t);  // -P = M r a_g
     for (int i = 0; i < N; ++i) out[i] = (f[i] - f[i + 1]) + mag;
   }
+  // K = df/du: tridiagonal, storey stiffnesses k0 (1 + 3 a d^2) (for the implicit schemes).
+  void tangent(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::MatRef K, nvib::MatRef C) const {
+    constexpr int N = 6;
+    K.setZero();
+    C.setZero();
+    double prev = 0.0;
+    for (int i = 0; i < N; ++i) {
+      const double d = u[i] - prev, k = 1e8 * (1.0 + 30.0 * d * d);
+      K(i, i) += k;
+      if (i > 0) {
+        K(i - 1, i - 1) += k;
+        K(i, i - 1) -= k;
+        K(i - 1, i) -= k;
+      }
+      prev = u[i];
+    }
+  }
   bool uses_velocity() const { return false; }
 };
 
@@ -86,6 +106,9 @@ void bench(const char* label, const Scheme& scheme, const ModelT& model, double 
               "\"best\": %.9g, \"median\": %.9g, \"best_wall_time\": %.9g, ",
               label, static_cast<long long>(k), static_cast<long long>(res.stats.num_steps),
               static_cast<long long>(res.t.size()), repeats, times.front(), times[times.size() / 2], inner.front());
+  std::printf("\"newton_iters\": %lld, \"force_evals\": %lld, \"tangent_evals\": %lld, \"status\": \"%s\", ",
+              static_cast<long long>(res.stats.num_newton_iters), static_cast<long long>(res.stats.num_force_evals),
+              static_cast<long long>(res.stats.num_tangent_evals), nvib::to_string(res.status));
   print_last_row("u", res.u);
   std::printf(", ");
   print_last_row("v", res.v);
@@ -98,10 +121,21 @@ void bench(const char* label, const Scheme& scheme, const ModelT& model, double 
 }  // namespace
 
 int main(int argc, char** argv) {
+  const bool implicit = argc > 1 && std::string(argv[argc - 1]) == "--implicit";
+  if (implicit) --argc;
   BenchArgs a;
   if (!parse_bench_args(argc, argv, a)) return 2;
   const auto scene = building();
   const auto functor = building_functor();
+  if (implicit) {
+    for (const std::int64_t k : a.save_every) {
+      bench("newmark", nvib::Newmark(), scene, a.h, a.t_end, a.repeats, k);
+      bench("newmark_functor", nvib::Newmark(), functor, a.h, a.t_end, a.repeats, k);
+      bench("galpha", nvib::GeneralizedAlpha(), scene, a.h, a.t_end, a.repeats, k);
+      bench("galpha_functor", nvib::GeneralizedAlpha(), functor, a.h, a.t_end, a.repeats, k);
+    }
+    return 0;
+  }
   for (const std::int64_t k : a.save_every) {
     bench("cd", nvib::CentralDifference(), scene, a.h, a.t_end, a.repeats, k);
     bench("cd_functor", nvib::CentralDifference(), functor, a.h, a.t_end, a.repeats, k);

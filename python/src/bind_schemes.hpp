@@ -197,8 +197,9 @@ py::class_<S> bind_parameters(py::module_& m) {
   cls.def(py::init([](const py::args& a, const py::kwargs& k) { return construct<S>(a, k); }))
       .def_static("parameters", &describe<S>, "the declared parameters: name, kind, default, doc, bounds, range, positional")
       .def("__repr__", &repr_of<S>)
-      .def("__eq__", [](const S& a, py::object b) { return py::isinstance<S>(b) && repr_of(a) == repr_of(b.cast<S>()); })
-      .def("__hash__", [](const S& s) { return py::hash(py::str(repr_of(s))); })
+      // By value (so -0.0 == 0.0, as for floats), parameter by parameter.
+      .def("__eq__", [](const S& a, py::object b) { return py::isinstance<S>(b) && state_of(a).equal(state_of(b.cast<S>())); })
+      .def("__hash__", [](const S& s) { return py::hash(py::tuple(state_of(s).attr("values")())); })
       .def(py::pickle([](const S& s) { return state_of(s); },
                       [](const py::dict& d) { return construct<S>(py::args(), py::kwargs(d)); }));
   const S defaults{};

@@ -31,7 +31,9 @@ struct Hardening {
 template <class Scheme>
 void fitted_orders(const Scheme& s, double& pu, double& pv) {
   const auto model = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(1)), Hardening{});
-  const Vector u0 = Vector::Constant(1, 1.5), v0 = Vector::Zero(1);
+  // Started off a turning point: from rest the problem is symmetric in time about t = 0, and some
+  // schemes' errors then cancel to a higher order than they have in general.
+  const Vector u0 = Vector::Constant(1, 1.5), v0 = Vector::Constant(1, 30.0);
   // t_end a multiple of every step, so each run ends at the same time.
   const double omega = std::sqrt(100.0 * (1.0 + 30.0 * 1.5 * 1.5)), h0 = 0.05 / omega, t_end = 256 * h0;
   double x[6], v[6];

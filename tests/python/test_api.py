@@ -250,6 +250,16 @@ def test_scheme_parameter_round_trip():
     assert nvib.CentralDifference().velocity == "synchronized"
 
 
+def test_schemes_compare_by_value():
+    a, b = nvib.GeneralizedAlpha(-0.0, -0.0), nvib.GeneralizedAlpha(0.0, 0.0)
+    assert a == b and hash(a) == hash(b) and a != nvib.GeneralizedAlpha(0.0, 0.1, 0.3025, 0.6)
+    assert nvib.GeneralizedAlpha.hht(0.0) == nvib.GeneralizedAlpha.wbz(-0.0) == nvib.GeneralizedAlpha(0.0, 0.0)
+    for s in (nvib.GeneralizedAlpha.hht(0.0), nvib.GeneralizedAlpha.wbz(-0.0)):
+        assert "-0" not in repr(s) and "-0" not in s.label and eval(repr(s), vars(nvib)) == s
+    assert nvib.Newmark(newton=nvib.Newton(rtol=1e-8)) != nvib.Newmark()
+    assert len({nvib.CEMDTS(0.45), nvib.CEMDTS(), nvib.CEMDTS(0.5)}) == 2
+
+
 # --------------------------------------------------------------------------- saving
 @pytest.mark.parametrize("nsteps, k", [(10, 1), (10, 3), (12, 3), (12, 12), (12, 20), (1, 1), (7, 2)])
 def test_save_every_semantics(nsteps, k):

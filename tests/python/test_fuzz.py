@@ -415,7 +415,8 @@ def constructors(cls) -> list:
 def test_fuzz_scheme_constructors(scheme_class, data):
     draw = Draw(data)
     make, params = draw(st.sampled_from(constructors(scheme_class)), label="constructor")
-    chosen = draw(st.lists(st.sampled_from(params), max_size=len(params), unique_by=lambda p: p["name"]))
+    chosen = draw(st.lists(st.sampled_from(params), max_size=len(params), unique_by=lambda p: p["name"])) \
+        if params else []  # a scheme may have no parameters
     kwargs = {p["name"]: draw.pick(valid_value(p), BAD_VALUES) for p in chosen}
     if draw.chance(draw.bad_percent):
         kwargs[draw(st.sampled_from(["foo", "eta", "beta", "alpha", "max_iter"]))] = draw(st.floats(0, 1))

@@ -17,7 +17,8 @@ def test_declared_order(psi, phi, order):
 @pytest.mark.parametrize("psi, phi", [(0.6, 0.6), (0.5, 0.6)])
 @pytest.mark.parametrize("problem", ["forced", "hardening"])
 def test_first_order_when_phi_is_not_half(psi, phi, problem):
-    check_declared_orders(nvib.Zhai(psi, phi), problem)
+    # on the hardening oscillator the velocity fits 0.90, 0.96, 0.98 from 0, 1, 2 halvings down
+    check_declared_orders(nvib.Zhai(psi, phi), problem, refine=1 if problem == "hardening" else 0)
 
 
 def test_psi_alone_keeps_second_order():

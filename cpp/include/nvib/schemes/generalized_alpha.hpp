@@ -66,13 +66,13 @@ struct GeneralizedAlpha {
     NVIB_CHECK(std::isfinite(alpha) && alpha >= -1.0 / 3.0 && alpha <= 0.0, "alpha",
                "HHT needs -1/3 <= alpha <= 0 (Hilber et al. 1977 sign), got " + detail::fmt(alpha) +
                    "; OpenSees' HHT alpha in [2/3, 1] corresponds to alpha - 1");
-    return GeneralizedAlpha(0.0, -alpha, 0.25 * (1.0 - alpha) * (1.0 - alpha), 0.5 - alpha, nw);
+    return GeneralizedAlpha(0.0, 0.0 - alpha, 0.25 * (1.0 - alpha) * (1.0 - alpha), 0.5 - alpha, nw);  // never -0
   }
   // Wood-Bossak-Zienkiewicz (1980): alpha in [-1, 0]; alpha_m = alpha here.
   static GeneralizedAlpha wbz(double alpha, Newton nw = {}) {
     NVIB_CHECK(std::isfinite(alpha) && alpha >= -1.0 && alpha <= 0.0, "alpha",
                "WBZ needs -1 <= alpha <= 0, got " + detail::fmt(alpha));
-    return GeneralizedAlpha(alpha, 0.0, 0.25 * (1.0 - alpha) * (1.0 - alpha), 0.5 - alpha, nw);
+    return GeneralizedAlpha(alpha + 0.0, 0.0, 0.25 * (1.0 - alpha) * (1.0 - alpha), 0.5 - alpha, nw);  // never -0
   }
   template <class V>
   static void factories(V&& v) {
