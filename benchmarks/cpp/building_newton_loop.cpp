@@ -17,13 +17,13 @@
 //               s the largest |term| of the three in any row (a residual of
 //               exactly 0 at the predictor is accepted at once);
 //   iteration   S du = -r, S = (1-am)/(beta h^2) M + (1-af) K_t(u_a), the
-//               tangent re-evaluated every iteration (full Newton);
+//               tangent re-evaluated every iteration (full Newton); a_{n+1}
+//               and v_{n+1} follow u_{n+1} by increments, c0 du and c1 du;
 //   round-off   when the last increment was negligible (|du| <= atol +
 //               1e-3 rtol |u|) and the residual no longer falls, the step is
 //               accepted if the residual is within the round-off of its own
 //               evaluation (8 eps times the largest row sum of the magnitudes
-//               that enter it), else the run stops: at rtol = 1e-10 this
-//               decides about one step in a thousand on this model.
+//               that enter it), else the run stops.
 // Newmark is am = af = 0 (beta = 1/4, gamma = 1/2); the paper's GaM is
 // am = af = 1/2. rtol = 1e-10 and atol = 1e-12, nvib's defaults; at most 20
 // iterations (nvib's default), beyond which the run stops with an error.
@@ -193,18 +193,19 @@ bool run(double h, double am, double af, double beta, double gamma, std::int64_t
   for (int i = 0; i < N; ++i) s.a[i] = -g[i] / MASS;
   std::int64_t row = 0;
   save(out, row, 0.0, s);
-  const double c0 = 1.0 / (beta * h * h), ca = 0.5 / beta - 1.0;
+  const double c0 = 1.0 / (beta * h * h), c1 = gamma / (beta * h), ca = 0.5 / beta - 1.0;
   const double cm = (1.0 - am) * c0, ck = 1.0 - af;
   for (std::int64_t n = 1; n <= nsteps; ++n) {
     const double t1 = static_cast<double>(n) * h, ta = t1 - af * h;
-    for (int i = 0; i < N; ++i) u1[i] = s.u[i];  // predictor
+    for (int i = 0; i < N; ++i) {  // predictor u1 = u_n, its a1 and v1 by the Newmark relations
+      u1[i] = s.u[i];
+      a1[i] = c0 * (u1[i] - s.u[i] - h * s.v[i]) - ca * s.a[i];
+      v1[i] = s.v[i] + h * (1.0 - gamma) * s.a[i] + h * gamma * a1[i];
+    }
     double previous = 0.0;
     bool small_step = false;
     for (int it = 0;; ++it) {
-      for (int i = 0; i < N; ++i) {
-        a1[i] = c0 * (u1[i] - s.u[i] - h * s.v[i]) - ca * s.a[i];
-        ua[i] = (1.0 - af) * u1[i] + af * s.u[i];
-      }
+      for (int i = 0; i < N; ++i) ua[i] = (1.0 - af) * u1[i] + af * s.u[i];
       force(ua, ta, g);
       ++c.force_evals;
       double norm = 0.0, scale = 0.0;
@@ -220,7 +221,7 @@ bool run(double h, double am, double af, double beta, double gamma, std::int64_t
         double mag[N], roundoff = 0.0;
         force_magnitude(ua, ta, mag);
         for (int i = 0; i < N; ++i) {
-          const double w = (1.0 - am) * (c0 * (std::abs(u1[i]) + std::abs(s.u[i]) + h * std::abs(s.v[i])) +
+          const double w = (1.0 - am) * (c0 * (std::abs(u1[i] - s.u[i]) + h * std::abs(s.v[i])) +
                                          std::abs(ca) * std::abs(s.a[i])) +
                            std::abs(am) * std::abs(s.a[i]);
           roundoff = std::max(roundoff, MASS * w + mag[i]);
@@ -238,8 +239,10 @@ bool run(double h, double am, double af, double beta, double gamma, std::int64_t
       else
         solve_dense(kt, cm, ck, r);
       double du = 0.0, un = 0.0;
-      for (int i = 0; i < N; ++i) {
+      for (int i = 0; i < N; ++i) {  // the kinematics by increments: da1 = c0 du, dv1 = c1 du
         u1[i] += r[i];
+        a1[i] += c0 * r[i];
+        v1[i] += c1 * r[i];
         du = std::max(du, std::abs(r[i]));
         un = std::max(un, std::abs(u1[i]));
       }
@@ -247,7 +250,6 @@ bool run(double h, double am, double af, double beta, double gamma, std::int64_t
       ++c.iters;
     }
     for (int i = 0; i < N; ++i) {
-      v1[i] = s.v[i] + h * (1.0 - gamma) * s.a[i] + h * gamma * a1[i];
       s.u[i] = u1[i];
       s.v[i] = v1[i];
       s.a[i] = a1[i];

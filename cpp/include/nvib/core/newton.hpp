@@ -3,7 +3,9 @@
 //
 // A problem supplies, for its unknown x (the displacement at the end of a step):
 //   void predict(Vector& x)              the predictor
-//   void update(const Vector& x)         its kinematics from the unknown
+//   void update(const Vector& x)         its kinematics from the unknown (at the predictor)
+//   void increment(const Vector& dx)     optional: the kinematics carried by the increment dx of the
+//                                        unknown; update(x) is called instead where it is absent
 //   Residual residual(Vector& r)         r at the current kinematics, {max |r_i|, force scale}
 //   IterationMatrix matrix()             S = cM M + cC C_t + cK K_t, tangents at the current kinematics
 //   IterationMatrix start_matrix()       the same with the tangents at the start of the step
@@ -188,7 +190,9 @@ class NewtonSolver {
     return accept_unchecked(p, t, step);
   }
 
-  // x += -S^{-1} r, then the kinematics.
+  // x += -S^{-1} r, then the kinematics: by increments where the problem can
+  // (their round-off is relative to the kinematics, not to the large terms
+  // that cancel when they are recomputed from x), else from x.
   template <class Problem>
   void iterate(Problem& p, Vector& x, Stats& st) {
     du_ = -r_;
@@ -196,7 +200,10 @@ class NewtonSolver {
     ++st.num_linear_solves;
     ++st.num_newton_iters;
     x += du_;
-    p.update(x);
+    if constexpr (has_increment<Problem>::value)
+      p.increment(du_);
+    else
+      p.update(x);
   }
 
   // Accepts the step without an equilibrium check, but not unseen: the
@@ -287,6 +294,11 @@ class NewtonSolver {
   struct has_roundoff : std::false_type {};
   template <class P>
   struct has_roundoff<P, std::void_t<decltype(std::declval<P&>().residual_roundoff())>> : std::true_type {};
+  template <class P, class = void>
+  struct has_increment : std::false_type {};
+  template <class P>
+  struct has_increment<P, std::void_t<decltype(std::declval<P&>().increment(std::declval<const Vector&>()))>>
+      : std::true_type {};
   template <class P, class = void>
   struct has_regularization : std::false_type {};
   template <class P>

@@ -176,13 +176,22 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   // ---- the equation of the step, for the Newton component ----
   bool linear() const { return model_.is_linear(); }
   void predict(Vector& x) const { x = u_; }  // constant displacement (the incremental format's starting point)
-  // a1, v1 from u1 by the Newmark relations.
+  // a1, v1 from u1 by the Newmark relations (at the predictor).
   void update(const Vector& x) {
     const double h = h_, beta = p_.beta, gamma = p_.gamma;
     a1_ = c0_ * (x - u_ - h * v_) - (0.5 / beta - 1.0) * a_;
     v1_ = v_ + (h * (1.0 - gamma)) * a_ + (h * gamma) * a1_;
   }
-  IterationMatrix matrix() const { return coefficients(ua_, va_, ta_); }
+  // ... and by the increments of the same relations in the iterations: da1 = c0 du, dv1 = c1 du.
+  // Recomputed from u1, a1 would carry the round-off of c0 (u1 - u_n - h v_n), about eps c0 |u| (4e-4 N
+  // on the building's 1e5 kg floors at dt = 1e-4 s), above a tolerance of 1e-10 of the forces (2.5e-5 N
+  // there): Newton would end on its stall test after a wasted iteration. By increments the round-off is
+  // eps c0 (h |v_n| + |u1 - u_n|), a few hundred times smaller there.
+  void increment(const Vector& du) {
+    a1_.noalias() += c0_ * du;
+    v1_.noalias() += c1_ * du;
+  }
+  IterationMatrix matrix() const { return coefficients(*ua_at_, *va_at_, ta_); }
   IterationMatrix start_matrix() const { return coefficients(u_, v_, this->time()); }
   IterationMatrix coefficients(const Vector& u, const Vector& v, double t) const {
     const double am = p_.alpha_m, af = p_.alpha_f;
@@ -193,9 +202,18 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   Residual residual(Vector& r) {
     const double am = p_.alpha_m, af = p_.alpha_f;
     // alpha point: x_{n+1-af} = (1-af) x_{n+1} + af x_n
-    ua_ = (1.0 - af) * u1_ + af * u_;
-    va_ = (1.0 - af) * v1_ + af * v_;
-    model_.force(ua_, va_, ta_, G1_, stats_);
+    // (Newmark, af = 0: the end of the step itself; the velocity only where forces use it)
+    ua_at_ = &u1_;
+    va_at_ = &v1_;
+    if (af != 0.0) {
+      ua_ = (1.0 - af) * u1_ + af * u_;
+      ua_at_ = &ua_;
+      if (model_.uses_velocity()) {
+        va_ = (1.0 - af) * v1_ + af * v_;
+        va_at_ = &va_;
+      }
+    }
+    model_.force(*ua_at_, *va_at_, ta_, G1_, stats_);
     if (model_.mass().is_diagonal()) {  // one pass: r, its norm and the force scale together
       const double* m = model_.mass().diagonal_entries().data();
       const double *a1 = a1_.data(), *a0 = a_.data(), *g = G1_.data();
@@ -224,12 +242,13 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   }
 
   // Round-off in the residual at the current iterate: 8 eps times the
-  // magnitudes that enter it, c0 (|u1| + |u_n| + h |v_n|) in a1, the inertia
-  // of a_n and the force terms (their sum cancels to the residual).
+  // magnitudes that enter it, c0 (h |v_n| + |u1 - u_n|) in a1 (the
+  // predictor's a1 and the increments added to it), the inertia of a_n and
+  // the force terms (their sum cancels to the residual).
   double residual_roundoff() {
     const double am = p_.alpha_m, k = std::abs(0.5 / p_.beta - 1.0);
-    model_.force_magnitude(ua_, va_, ta_, G0_);
-    w_ = (1.0 - am) * (c0_ * (u1_.cwiseAbs() + u_.cwiseAbs() + h_ * v_.cwiseAbs()) + k * a_.cwiseAbs()) +
+    model_.force_magnitude(*ua_at_, *va_at_, ta_, G0_);
+    w_ = (1.0 - am) * (c0_ * ((u1_ - u_).cwiseAbs() + h_ * v_.cwiseAbs()) + k * a_.cwiseAbs()) +
          std::abs(am) * a_.cwiseAbs();
     model_.mass().apply(w_, G1_);
     G1_ += G0_;
@@ -265,6 +284,8 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   Solver newton_;
   double c0_ = 0.0, c1_ = 0.0, t1_ = 0.0, ta_ = 0.0;
   Vector G1_, G0_, ua_, va_, u1_, v1_, a1_, w_;
+  const Vector* ua_at_ = &ua_;  // the alpha point: ua_ and va_, or u1_ and v1_ where af = 0
+  const Vector* va_at_ = &va_;
 };
 
 }  // namespace nvib
