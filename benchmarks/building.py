@@ -83,10 +83,11 @@ def eigen_include() -> str:
     raise SystemExit("Eigen headers not found (pip install cmeel-eigen, or install libeigen3-dev)")
 
 
-def compile_programs(tmp: str, cxx: str) -> dict:
+def compile_programs(tmp: str, cxx: str, loop: str = "building_loop") -> dict:
+    """The hand-written loop `loop` and building_nvib, built with the Release flags; {name: executable}."""
     eigen = eigen_include()
     out = {}
-    for name, extra in (("building_loop", []),
+    for name, extra in ((loop, []),
                         ("building_nvib", ["-I", os.path.join(ROOT, "cpp", "include"), "-I", eigen])):
         exe = os.path.join(tmp, name)
         cmd = [cxx, *CXXFLAGS, *extra, os.path.join(HERE, "cpp", name + ".cpp"), "-o", exe]
@@ -231,21 +232,32 @@ def machine_info(cxx: str, load: float) -> list[str]:
     ] + stale
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds (default 5)")
-    ap.add_argument("--repeats", type=int, default=10, help="runs per contender and round (default 10)")
-    ap.add_argument("--save-every", type=int, nargs="+", default=[10, 1])
-    ap.add_argument("--python-force-t-end", type=float, default=0.5,
-                    help="t_end of the Python-callable runs (default 0.5 s = 5,000 steps)")
-    ap.add_argument("--no-context", action="store_true", help="skip the Python-callable and DOP853 rows")
+def bench_parser(doc: str, rounds: int, repeats: int) -> argparse.ArgumentParser:
+    """The options the C++-comparing benchmarks share: --rounds, --repeats, --cxx (and --out, added by each)."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rounds", type=int, default=rounds, help=f"interleaved rounds (default {rounds})")
+    ap.add_argument("--repeats", type=int, default=repeats, help=f"runs per contender and round (default {repeats})")
     ap.add_argument("--cxx", default=os.environ.get("CXX", "g++"))
-    ap.add_argument("--out", default=os.path.join(HERE, "results", "building.md"))
+    return ap
+
+
+def checked_bench_args(ap: argparse.ArgumentParser) -> argparse.Namespace:
     args = ap.parse_args()
     if args.rounds < 1 or args.repeats < 1:
         ap.error("--rounds and --repeats must be >= 1")
     if shutil.which(args.cxx) is None:
         raise SystemExit(f"C++ compiler {args.cxx!r} not found (set --cxx or CXX)")
+    return args
+
+
+def main() -> int:
+    ap = bench_parser(__doc__, rounds=5, repeats=10)
+    ap.add_argument("--save-every", type=int, nargs="+", default=[10, 1])
+    ap.add_argument("--python-force-t-end", type=float, default=0.5,
+                    help="t_end of the Python-callable runs (default 0.5 s = 5,000 steps)")
+    ap.add_argument("--no-context", action="store_true", help="skip the Python-callable and DOP853 rows")
+    ap.add_argument("--out", default=os.path.join(HERE, "results", "building.md"))
+    args = checked_bench_args(ap)
 
     load_at_start = os.getloadavg()[0]
     model = nvib.load_scene("building")

@@ -31,10 +31,8 @@ over ROUNDS interleaved rounds of REPEATS runs.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -43,22 +41,11 @@ import time
 import numpy as np
 
 import nvib
-from building import CXXFLAGS, HERE, ROOT, eigen_include, machine_info, rel_diff
+from building import HERE, bench_parser, checked_bench_args, compile_programs, machine_info, rel_diff
 
 DT, T_END, SAVE_EVERY = 1e-4, 10.0, 10
 TARGET = 2.0
 SCHEMES = {"newmark": ("Newmark (newton)", nvib.Newmark), "galpha": ("GαM(0.5,0.5) (newton)", nvib.GeneralizedAlpha)}
-
-
-def compile_programs(tmp: str, cxx: str) -> dict:
-    eigen = eigen_include()
-    out = {}
-    for name, extra in (("building_newton_loop", []),
-                        ("building_nvib", ["-I", os.path.join(ROOT, "cpp", "include"), "-I", eigen])):
-        exe = os.path.join(tmp, name)
-        subprocess.run([cxx, *CXXFLAGS, *extra, os.path.join(HERE, "cpp", name + ".cpp"), "-o", exe], check=True)
-        out[name] = exe
-    return out
 
 
 def run_json(args: list[str], env=None) -> list[dict]:
@@ -102,17 +89,10 @@ def opensees(repeats: int) -> tuple[dict, str]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--repeats", type=int, default=5)
+    ap = bench_parser(__doc__, rounds=3, repeats=5)
     ap.add_argument("--no-opensees", action="store_true")
-    ap.add_argument("--cxx", default=os.environ.get("CXX", "g++"))
     ap.add_argument("--out", default=os.path.join(HERE, "results", "implicit.md"))
-    args = ap.parse_args()
-    if args.rounds < 1 or args.repeats < 1:
-        ap.error("--rounds and --repeats must be >= 1")
-    if shutil.which(args.cxx) is None:
-        raise SystemExit(f"C++ compiler {args.cxx!r} not found (set --cxx or CXX)")
+    args = checked_bench_args(ap)
     load_at_start = os.getloadavg()[0]
     model = nvib.load_scene("building")
     best: dict = {}
@@ -122,7 +102,7 @@ def main() -> int:
             best[(key, who)] = dict(row)
 
     with tempfile.TemporaryDirectory(prefix="nvib-implicit-") as tmp:
-        exes = compile_programs(tmp, args.cxx)
+        exes = compile_programs(tmp, args.cxx, loop="building_newton_loop")
         for rnd in range(args.rounds):
             common = [repr(DT), repr(T_END), str(args.repeats)]
             for row in run_json([exes["building_newton_loop"], *common, str(SAVE_EVERY)]):

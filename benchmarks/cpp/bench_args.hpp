@@ -1,5 +1,5 @@
-// Command line and output helpers shared by the benchmark programs (no nvib in here: the
-// hand-written loops must not depend on the library they are compared with).
+// Command line, state, saved history and output helpers shared by the benchmark programs (no nvib in
+// here: the hand-written loops must not depend on the library they are compared with).
 //   PROGRAM DT T_END REPEATS ETA SAVE_EVERY [SAVE_EVERY ...] [--dump=PREFIX]
 #pragma once
 
@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,4 +53,45 @@ inline void print_json_vector(const char* name, const double* x, int n) {
   std::printf("\"%s\": [", name);
   for (int i = 0; i < n; ++i) std::printf("%s%.17g", i ? ", " : "", x[i]);
   std::printf("]");
+}
+
+// The state of a hand-written loop of N DOFs.
+template <int N>
+struct LoopState {
+  double u[N], v[N], a[N];
+};
+
+// Its saved history, the rows nvib's solve() returns (steps 0, k, 2k, ... and the last one),
+// allocated once before the loop and filled in place.
+template <int N>
+struct LoopOutput {
+  std::unique_ptr<double[]> t, u, v, a;
+  std::int64_t rows = 0;
+
+  static LoopOutput allocate(std::int64_t nsteps, std::int64_t k) {
+    LoopOutput out;
+    out.rows = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
+    out.t.reset(new double[out.rows]);
+    out.u.reset(new double[out.rows * N]);
+    out.v.reset(new double[out.rows * N]);
+    out.a.reset(new double[out.rows * N]);
+    return out;
+  }
+  void save(std::int64_t& row, double time, const LoopState<N>& s) {
+    t[row] = time;
+    std::memcpy(u.get() + row * N, s.u, sizeof s.u);
+    std::memcpy(v.get() + row * N, s.v, sizeof s.v);
+    std::memcpy(a.get() + row * N, s.a, sizeof s.a);
+    ++row;
+  }
+};
+
+// "u": [...], "v": [...], "a": [...] (JSON members).
+template <int N>
+void print_json_state(const LoopState<N>& s) {
+  print_json_vector("u", s.u, N);
+  std::printf(", ");
+  print_json_vector("v", s.v, N);
+  std::printf(", ");
+  print_json_vector("a", s.a, N);
 }

@@ -44,65 +44,32 @@
 #include <vector>
 
 #include "bench_args.hpp"
+#include "building_model.hpp"
 
 namespace {
 
-constexpr int N = 6;
-constexpr double MASS = 1e5, K0 = 1e8, HARD = 10.0;
-constexpr double AG_AMP = 10.0, AG_OMEGA = 3.141592653589793;
+using namespace building;
+using State = LoopState<N>;
+using Output = LoopOutput<N>;
 
 // a = M^{-1} (-F_s(u)) - r a_g(t)
 inline void acc(const double* u, double t, double* a) {
   double f[N + 1];
-  double prev = 0.0;
-  for (int i = 0; i < N; ++i) {
-    const double d = u[i] - prev;  // drift of storey i+1
-    f[i] = K0 * (1.0 + HARD * d * d) * d;
-    prev = u[i];
-  }
-  f[N] = 0.0;  // no storey above the roof
-  const double ag = AG_AMP * std::sin(AG_OMEGA * t);
+  storey_forces(u, f);
+  const double ag = ground_acceleration(t);
   for (int i = 0; i < N; ++i) a[i] = -(f[i] - f[i + 1]) / MASS - ag;
 }
 
-struct Output {
-  std::unique_ptr<double[]> t, u, v, a;
-  std::int64_t rows = 0;
-};
 
-struct State {
-  double u[N], v[N], a[N];
-};
 
-inline void save(Output& out, std::int64_t& row, double t, const State& s) {
-  out.t[row] = t;
-  double* pu = out.u.get() + row * N;
-  double* pv = out.v.get() + row * N;
-  double* pa = out.a.get() + row * N;
-  for (int i = 0; i < N; ++i) {
-    pu[i] = s.u[i];
-    pv[i] = s.v[i];
-    pa[i] = s.a[i];
-  }
-  ++row;
-}
 
-Output allocate(std::int64_t nsteps, std::int64_t k) {
-  Output out;
-  out.rows = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
-  out.t.reset(new double[out.rows]);
-  out.u.reset(new double[out.rows * N]);
-  out.v.reset(new double[out.rows * N]);
-  out.a.reset(new double[out.rows * N]);
-  return out;
-}
 
 // One run of the central difference; returns the final state.
 State run_cd(double h, std::int64_t nsteps, std::int64_t k, Output& out) {
   State s{};
   acc(s.u, 0.0, s.a);
   std::int64_t row = 0;
-  save(out, row, 0.0, s);
+  out.save(row, 0.0, s);
   const double hh2 = 0.5 * h * h, h2 = 0.5 * h;
   double anew[N];
   for (std::int64_t n = 1; n <= nsteps; ++n) {
@@ -113,7 +80,7 @@ State run_cd(double h, std::int64_t nsteps, std::int64_t k, Output& out) {
       s.v[i] += h2 * (s.a[i] + anew[i]);
       s.a[i] = anew[i];
     }
-    if (n % k == 0 || n == nsteps) save(out, row, t, s);
+    if (n % k == 0 || n == nsteps) out.save(row, t, s);
   }
   return s;
 }
@@ -125,7 +92,7 @@ State run_cemdts(double h, double eta, std::int64_t nsteps, std::int64_t k, Outp
   double aprev[N], anew[N];
   for (int i = 0; i < N; ++i) aprev[i] = s.a[i];  // a_{-1} = a_0
   std::int64_t row = 0;
-  save(out, row, 0.0, s);
+  out.save(row, 0.0, s);
   const double hh = h * h;
   const double cu1 = (0.5 + eta) * hh, cu2 = eta * hh;
   const double cv1 = (0.5 - eta) * h, cv2 = (0.5 + 2.0 * eta) * h, cv3 = eta * h;
@@ -138,7 +105,7 @@ State run_cemdts(double h, double eta, std::int64_t nsteps, std::int64_t k, Outp
       aprev[i] = s.a[i];
       s.a[i] = anew[i];
     }
-    if (n % k == 0 || n == nsteps) save(out, row, t, s);
+    if (n % k == 0 || n == nsteps) out.save(row, t, s);
   }
   return s;
 }
@@ -165,7 +132,7 @@ int main(int argc, char** argv) {
       auto run = [&](Output& out) {
         return scheme == 0 ? run_cd(h, nsteps, k, out) : run_cemdts(h, eta, nsteps, k, out);
       };
-      Output kept = allocate(nsteps, k);
+      Output kept = Output::allocate(nsteps, k);
       last = run(kept);
       for (int r = 0; r < repeats; ++r) {
         const auto t0 = clock::now();
@@ -182,7 +149,7 @@ int main(int argc, char** argv) {
       }
       for (int r = 0; r < repeats; ++r) {
         const auto t0 = clock::now();
-        Output out = allocate(nsteps, k);
+        Output out = Output::allocate(nsteps, k);
         const State s = run(out);
         const auto t1 = clock::now();
         fresh.push_back(std::chrono::duration<double>(t1 - t0).count());
@@ -200,11 +167,7 @@ int main(int argc, char** argv) {
                   scheme == 0 ? "cd" : "cemdts", static_cast<long long>(k), static_cast<long long>(nsteps),
                   static_cast<long long>(rows), repeats, times.front(), times[times.size() / 2], fresh.front(),
                   checksum);
-      print_json_vector("u", last.u, N);
-      std::printf(", ");
-      print_json_vector("v", last.v, N);
-      std::printf(", ");
-      print_json_vector("a", last.a, N);
+      print_json_state(last);
       std::printf("}\n");
       std::fflush(stdout);
     }

@@ -54,41 +54,30 @@
 #include <vector>
 
 #include "bench_args.hpp"
+#include "building_model.hpp"
 
 namespace {
 
-constexpr int N = 6;
-constexpr double MASS = 1e5, K0 = 1e8, HARD = 10.0;
-constexpr double AG_AMP = 10.0, AG_OMEGA = 3.141592653589793;
+using namespace building;
+using State = LoopState<N>;
+using Output = LoopOutput<N>;
 constexpr double RTOL = 1e-10, ATOL = 1e-12;
 constexpr int MAX_ITER = 20;
 
 // G(u, t) = F_s(u) + M r a_g(t): everything but the inertia.
 inline void force(const double* u, double t, double* g) {
   double f[N + 1];
-  double prev = 0.0;
-  for (int i = 0; i < N; ++i) {
-    const double d = u[i] - prev;
-    f[i] = K0 * (1.0 + HARD * d * d) * d;
-    prev = u[i];
-  }
-  f[N] = 0.0;
-  const double mag = MASS * AG_AMP * std::sin(AG_OMEGA * t);
+  storey_forces(u, f);
+  const double mag = MASS * ground_acceleration(t);
   for (int i = 0; i < N; ++i) g[i] = (f[i] - f[i + 1]) + mag;
 }
 
 // Round-off scale of G: per DOF the sum of |terms| (storey forces on both ends, |M a_g|).
 inline void force_magnitude(const double* u, double t, double* g) {
   double f[N + 1];
-  double prev = 0.0;
-  for (int i = 0; i < N; ++i) {
-    const double d = u[i] - prev;
-    f[i] = std::abs(K0 * (1.0 + HARD * d * d) * d);
-    prev = u[i];
-  }
-  f[N] = 0.0;
-  const double mag = std::abs(MASS * AG_AMP * std::sin(AG_OMEGA * t));
-  for (int i = 0; i < N; ++i) g[i] = f[i] + f[i + 1] + mag;
+  storey_forces(u, f);
+  const double mag = std::abs(MASS * ground_acceleration(t));
+  for (int i = 0; i < N; ++i) g[i] = std::abs(f[i]) + std::abs(f[i + 1]) + mag;
 }
 
 // The storey stiffnesses df/dd = k0 (1 + 3 a d^2); K_t is tridiagonal:
@@ -148,38 +137,13 @@ inline void solve_tridiag(const double* k, double cm, double ck, double* x) {
   for (int i = N - 2; i >= 0; --i) x[i] = (x[i] - upper[i] * x[i + 1]) / diag[i];
 }
 
-struct Output {
-  std::unique_ptr<double[]> t, u, v, a;
-  std::int64_t rows = 0;
-};
 
-struct State {
-  double u[N], v[N], a[N];
-};
 
 struct Counts {
   std::int64_t iters = 0, force_evals = 0, tangent_evals = 0;
 };
 
-inline void save(Output& out, std::int64_t& row, double t, const State& s) {
-  out.t[row] = t;
-  for (int i = 0; i < N; ++i) {
-    out.u[row * N + i] = s.u[i];
-    out.v[row * N + i] = s.v[i];
-    out.a[row * N + i] = s.a[i];
-  }
-  ++row;
-}
 
-Output allocate(std::int64_t nsteps, std::int64_t k) {
-  Output out;
-  out.rows = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
-  out.t.reset(new double[out.rows]);
-  out.u.reset(new double[out.rows * N]);
-  out.v.reset(new double[out.rows * N]);
-  out.a.reset(new double[out.rows * N]);
-  return out;
-}
 
 // One run; false if a step did not converge in MAX_ITER iterations.
 template <bool Tridiagonal>
@@ -192,7 +156,7 @@ bool run(double h, double am, double af, double beta, double gamma, std::int64_t
   ++c.force_evals;
   for (int i = 0; i < N; ++i) s.a[i] = -g[i] / MASS;
   std::int64_t row = 0;
-  save(out, row, 0.0, s);
+  out.save(row, 0.0, s);
   const double c0 = 1.0 / (beta * h * h), c1 = gamma / (beta * h), ca = 0.5 / beta - 1.0;
   const double cm = (1.0 - am) * c0, ck = 1.0 - af;
   for (std::int64_t n = 1; n <= nsteps; ++n) {
@@ -254,7 +218,7 @@ bool run(double h, double am, double af, double beta, double gamma, std::int64_t
       s.v[i] = v1[i];
       s.a[i] = a1[i];
     }
-    if (n % k == 0 || n == nsteps) save(out, row, t1, s);
+    if (n % k == 0 || n == nsteps) out.save(row, t1, s);
   }
   return true;
 }
@@ -278,7 +242,7 @@ int main(int argc, char** argv) {
   const Case cases[] = {{"newmark", 0.0, 0.0, 0.25, 0.5}, {"galpha", 0.5, 0.5, 0.25, 0.5}};
   for (const Case& cs : cases) {
     for (int tri = 0; tri < 2; ++tri) {
-      Output out = allocate(nsteps, k);
+      Output out = Output::allocate(nsteps, k);
       State s{};
       Counts c{};
       auto once = [&]() {
@@ -306,11 +270,7 @@ int main(int argc, char** argv) {
                   cs.scheme, tri ? "tridiag" : "dense", static_cast<long long>(nsteps), static_cast<long long>(k),
                   repeats, times.front(), times[times.size() / 2], static_cast<long long>(c.iters),
                   static_cast<long long>(c.force_evals), static_cast<long long>(c.tangent_evals), checksum);
-      print_json_vector("u", s.u, N);
-      std::printf(", ");
-      print_json_vector("v", s.v, N);
-      std::printf(", ");
-      print_json_vector("a", s.a, N);
+      print_json_state(s);
       std::printf("}\n");
       std::fflush(stdout);
     }

@@ -42,6 +42,8 @@
 namespace {
 
 constexpr int N = 10;
+using State = LoopState<N>;
+using Output = LoopOutput<N>;
 enum { ZC, BC, ZT1, BT1, ZT2, BT2, ZW1, ZW2, ZW3, ZW4 };
 constexpr double MASS[N] = {34500.0, 1560400.0, 3500.0, 1722.0, 3500.0, 1722.0, 2200.0, 2200.0, 2200.0, 2200.0};
 constexpr double WEIGHT[N] = {338445.0, 0.0, 34335.0, 0.0, 34335.0, 0.0, 21582.0, 21582.0, 21582.0, 21582.0};
@@ -82,32 +84,9 @@ inline void acc(const double* u, const double* v, double* a) {
   for (int i = 0; i < N; ++i) a[i] = -f[i] / MASS[i];
 }
 
-struct State {
-  double u[N], v[N], a[N];
-};
 
-struct Output {
-  std::unique_ptr<double[]> t, u, v, a;
-  std::int64_t rows = 0;
-};
 
-Output allocate(std::int64_t nsteps, std::int64_t k) {
-  Output out;
-  out.rows = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
-  out.t.reset(new double[out.rows]);
-  out.u.reset(new double[out.rows * N]);
-  out.v.reset(new double[out.rows * N]);
-  out.a.reset(new double[out.rows * N]);
-  return out;
-}
 
-inline void save(Output& out, std::int64_t& row, double t, const State& s) {
-  out.t[row] = t;
-  std::memcpy(out.u.get() + row * N, s.u, sizeof s.u);
-  std::memcpy(out.v.get() + row * N, s.v, sizeof s.v);
-  std::memcpy(out.a.get() + row * N, s.a, sizeof s.a);
-  ++row;
-}
 
 State start(const double* u0, const double* v0) {
   State s{};
@@ -122,7 +101,7 @@ State start(const double* u0, const double* v0) {
 State run_cd(const double* u0, const double* v0, double h, std::int64_t nsteps, std::int64_t k, Output& out) {
   State s = start(u0, v0);
   std::int64_t row = 0;
-  save(out, row, 0.0, s);
+  out.save(row, 0.0, s);
   const double hh2 = 0.5 * h * h, h2 = 0.5 * h;
   double anew[N], vstar[N];
   for (std::int64_t n = 1; n <= nsteps; ++n) {
@@ -135,7 +114,7 @@ State run_cd(const double* u0, const double* v0, double h, std::int64_t nsteps, 
       s.v[i] += h2 * (s.a[i] + anew[i]);
       s.a[i] = anew[i];
     }
-    if (n % k == 0 || n == nsteps) save(out, row, static_cast<double>(n) * h, s);
+    if (n % k == 0 || n == nsteps) out.save(row, static_cast<double>(n) * h, s);
   }
   return s;
 }
@@ -146,7 +125,7 @@ State run_cemdts(const double* u0, const double* v0, double h, double eta, std::
   double aprev[N], anew[N], vstar[N];
   for (int i = 0; i < N; ++i) aprev[i] = s.a[i];  // a_{-1} = a_0
   std::int64_t row = 0;
-  save(out, row, 0.0, s);
+  out.save(row, 0.0, s);
   const double hh = h * h;
   const double cu1 = (0.5 + eta) * hh, cu2 = eta * hh;
   const double cp1 = (1.0 + eta) * h, cp2 = eta * h;
@@ -162,7 +141,7 @@ State run_cemdts(const double* u0, const double* v0, double h, double eta, std::
       aprev[i] = s.a[i];
       s.a[i] = anew[i];
     }
-    if (n % k == 0 || n == nsteps) save(out, row, static_cast<double>(n) * h, s);
+    if (n % k == 0 || n == nsteps) out.save(row, static_cast<double>(n) * h, s);
   }
   return s;
 }
@@ -188,7 +167,7 @@ int main(int argc, char** argv) {
   using clock = std::chrono::steady_clock;
 
   for (int scheme = 0; scheme < 2; ++scheme) {
-    Output out = allocate(nsteps, k);
+    Output out = Output::allocate(nsteps, k);
     auto run = [&]() {
       return scheme == 0 ? run_cd(u0, v0, h, nsteps, k, out) : run_cemdts(u0, v0, h, eta, nsteps, k, out);
     };
@@ -210,11 +189,7 @@ int main(int argc, char** argv) {
                 "\"best\": %.9g, \"median\": %.9g, ",
                 name, static_cast<long long>(k), static_cast<long long>(nsteps), static_cast<long long>(out.rows),
                 repeats, times.front(), times[times.size() / 2]);
-    print_json_vector("u", last.u, N);
-    std::printf(", ");
-    print_json_vector("v", last.v, N);
-    std::printf(", ");
-    print_json_vector("a", last.a, N);
+    print_json_state(last);
     std::printf("}\n");
     std::fflush(stdout);
   }

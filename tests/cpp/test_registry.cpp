@@ -10,22 +10,13 @@
 #include <string>
 
 #include "check.hpp"
+#include "models.hpp"
 
 using nvib::Vector;
 
 namespace {
 
-struct Hardening {
-  void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::VecRef out) const {
-    out[0] = 100.0 * (1.0 + 30.0 * u[0] * u[0]) * u[0];
-  }
-  void tangent(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::MatRef K, nvib::MatRef C) const {
-    K(0, 0) = 100.0 * (1.0 + 90.0 * u[0] * u[0]);
-    C(0, 0) = 0.0;
-  }
-  bool uses_velocity() const { return false; }
-  bool uses_time() const { return false; }
-};
+using nvib_test::Hardening;
 
 // Slope of log |state(h) - state(h/2)| against log h over the halvings of h0.
 template <class Scheme>

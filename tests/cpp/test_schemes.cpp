@@ -8,6 +8,7 @@
 #include <string>
 
 #include "check.hpp"
+#include "models.hpp"
 
 using nvib::Index;
 using nvib::Vector;
@@ -61,16 +62,7 @@ struct OverflowingTangent {
   bool uses_velocity() const { return false; }
 };
 
-struct Hardening {
-  void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::VecRef out) const {
-    out[0] = 100.0 * (1.0 + 30.0 * u[0] * u[0]) * u[0];
-  }
-  void tangent(const nvib::CVecRef& u, const nvib::CVecRef&, double, nvib::MatRef K, nvib::MatRef C) const {
-    K(0, 0) = 100.0 * (1.0 + 90.0 * u[0] * u[0]);
-    C(0, 0) = 0.0;
-  }
-  bool uses_velocity() const { return false; }
-};
+using nvib_test::Hardening;
 
 // 100 (1 + 30 u^2) u + 0.1 v^3 on every DOF, with its tangent.
 struct Duffing {
