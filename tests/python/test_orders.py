@@ -7,9 +7,23 @@ from __future__ import annotations
 
 import pytest
 
+import nvib
+
 from _orders import check_declared_orders
 
 
 @pytest.mark.parametrize("problem", ["forced", "hardening"])
 def test_declared_orders(scheme_class, problem):
     check_declared_orders(scheme_class(), problem)
+
+
+class _DeclaresSecondOrder(nvib.Zhai):
+    """Zhai(0.6, 0.6) is first order; this one claims second order for both u and v."""
+    order_u = property(lambda self: 2)
+    order_v = property(lambda self: 2)
+
+
+@pytest.mark.parametrize("problem", ["forced", "hardening", "free-matrix"])
+def test_a_wrongly_declared_order_fails(problem):
+    with pytest.raises(AssertionError, match="order"):
+        check_declared_orders(_DeclaresSecondOrder(0.6, 0.6), problem)
