@@ -85,3 +85,36 @@ def matrix(name: str, x, n: int) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise value_error(name, "contains NaN or Inf")
     return np.ascontiguousarray(a)
+
+
+def is_sparse(x) -> bool:
+    """A scipy.sparse matrix or array (scipy is imported only when one is given)."""
+    return type(x).__module__.startswith("scipy.sparse")
+
+
+def sparse_matrix(name: str, x, n: int | None = None):
+    """x as a scipy.sparse CSC matrix of float64: square (n x n if n is given), finite."""
+    from scipy import sparse
+
+    if x.ndim != 2 or x.shape[0] != x.shape[1] or (n is not None and x.shape[0] != n):
+        want = f"({n}, {n})" if n is not None else "a square matrix"
+        raise value_error(name, f"expected shape {want}, got {x.shape}")
+    if x.dtype.kind not in "iuf":
+        raise type_error(name, f"expected real numbers, got a sparse matrix of dtype {x.dtype}")
+    a = sparse.csc_matrix(x, dtype=float)
+    a.sum_duplicates()
+    if not np.all(np.isfinite(a.data)):
+        raise value_error(name, "contains NaN or Inf")
+    return a
+
+
+def linear_part(name: str, x, n: int):
+    """K or C: None (absent), a dense (n, n) array or a scipy.sparse matrix; a scipy.sparse CSC matrix for the
+    core (None: an empty one)."""
+    from scipy import sparse
+
+    if x is None:
+        return sparse.csc_matrix((0, 0))
+    if is_sparse(x):
+        return sparse_matrix(name, x, n)
+    return sparse.csc_matrix(matrix(name, x, n))

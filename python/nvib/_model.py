@@ -71,8 +71,10 @@ class Model:
 
     Parameters
     ----------
-    mass : 1-D array (lumped/diagonal mass) or 2-D symmetric positive definite matrix.
-    K, C : optional constant stiffness and damping matrices.
+    mass : 1-D array (lumped/diagonal mass), a scipy.sparse symmetric positive definite matrix (a
+        consistent mass: factorised once by a sparse Cholesky), or a dense one (up to 2000 DOFs).
+    K, C : optional constant stiffness and damping matrices, dense arrays or scipy.sparse matrices;
+        they are kept sparse, with the linear springs and dampers among the effects added in.
     force : optional callable ``force(u, v, t) -> array (n,)``: the nonlinear
         force on the left-hand side, loads included with a minus sign.
     tangent : optional callable ``tangent(u, v, t) -> (K_t, C_t)`` (C_t may be
@@ -93,9 +95,13 @@ class Model:
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
                  u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
-        m = np.ascontiguousarray(_checks.real_array("mass", [mass] if isinstance(mass, numbers.Real) else mass))
-        if m.ndim not in (1, 2):
-            raise _checks.value_error("mass", f"expected a 1-D array (diagonal) or a 2-D matrix, got {m.ndim} dimensions")
+        if _checks.is_sparse(mass):
+            m = _checks.sparse_matrix("mass", mass)
+        else:
+            m = np.ascontiguousarray(_checks.real_array("mass", [mass] if isinstance(mass, numbers.Real) else mass))
+            if m.ndim not in (1, 2):
+                raise _checks.value_error("mass", f"expected a 1-D array (diagonal), a 2-D matrix or a scipy.sparse "
+                                                  f"matrix, got {m.ndim} dimensions")
         n = m.shape[0]
         if n == 0:
             raise _checks.value_error("mass", "the model needs at least one degree of freedom")
@@ -110,8 +116,8 @@ class Model:
         if len(set(dofs)) != n:
             raise _checks.value_error("dofs", "names must be unique")
         self.dofs = dofs
-        Km = _checks.matrix("K", K, n) if K is not None else np.zeros((0, 0))
-        Cm = _checks.matrix("C", C, n) if C is not None else np.zeros((0, 0))
+        Km = _checks.linear_part("K", K, n)
+        Cm = _checks.linear_part("C", C, n)
         self.u0 = _checks.vector("u0", np.zeros(n) if u0 is None else u0, n)
         self.v0 = _checks.vector("v0", np.zeros(n) if v0 is None else v0, n)
         if force is not None and not callable(force):
@@ -249,16 +255,41 @@ class Model:
 
     @property
     def mass_matrix(self) -> np.ndarray:
+        """The mass as a dense array (models of up to 2000 DOFs; see ``mass_sparse``)."""
+        if self.n > 2000:
+            raise _checks.value_error("mass_matrix", f"a dense {self.n} x {self.n} array would take "
+                                                     f"{8e-6 * self.n ** 2:.0f} MB; use mass_sparse")
         return self._core.mass_matrix
+
+    @property
+    def mass_sparse(self):
+        """The mass as a scipy.sparse matrix (compressed columns)."""
+        return self._core.mass_sparse
+
+    @property
+    def K(self):
+        """The linear stiffness (the K given plus every linear spring), a scipy.sparse matrix."""
+        return self._core.K
+
+    @property
+    def C(self):
+        """The linear damping (the C given plus every linear damper), a scipy.sparse matrix."""
+        return self._core.C
 
     def evaluate_force(self, u, v, t: float = 0.0) -> np.ndarray:
         """K u + C v + F(u, v, t): everything on the left of M a + ... = 0."""
         return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), _checks.real("t", t))
 
-    def tangent_matrices(self, u, v, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """(K_t, C_t): derivatives of K u + C v + F(u, v, t) with respect to u and v."""
-        return self._core.tangent(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n),
-                                  _checks.real("t", t))
+    def tangent_matrices(self, u, v, t: float = 0.0, *, sparse: bool = False):
+        """(K_t, C_t): derivatives of K u + C v + F(u, v, t) with respect to u and v; dense arrays (models of
+        up to 2000 DOFs), or scipy.sparse matrices with ``sparse=True`` (models of declared effects)."""
+        args = (_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), _checks.real("t", t))
+        if sparse:
+            return self._core.tangent_sparse(*args)
+        if self.n > 2000:
+            raise _checks.value_error("sparse", f"dense {self.n} x {self.n} tangents would take "
+                                                f"{16e-6 * self.n ** 2:.0f} MB; use sparse=True")
+        return self._core.tangent(*args)
 
     def linearized_frequencies(self, u=None) -> np.ndarray:
         """Circular frequencies [rad/s] of the undamped model linearised at u (default: zero), ascending."""

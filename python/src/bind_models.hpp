@@ -59,6 +59,13 @@ inline nvib::Mass make_mass(const MassArray& m) {
   raise_value_error("mass", "expected a 1-D array (diagonal) or a 2-D matrix");
 }
 
+// A scipy.sparse mass: sparse (or lumped, if only its diagonal is stored).
+inline nvib::Mass make_mass(const py::object& mass) {
+  if (py::module_::import("scipy.sparse").attr("issparse")(mass).cast<bool>())
+    return nvib::Mass::sparse(mass.cast<nvib::SparseMatrix>());
+  return make_mass(mass.cast<MassArray>());
+}
+
 inline fx::Law parse_law(const std::string& s) {
   for (int k = 0; k < static_cast<int>(fx::AllLaws::size); ++k)
     if (s == fx::to_string(static_cast<fx::Law>(k))) return static_cast<fx::Law>(k);
@@ -105,7 +112,8 @@ inline py::dict effect_parameters(const fx::Effect& e) {
 // laws: (index, coef, law, tangent or None, where, uses_velocity, uses_time) per scalar Python law.
 using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, py::object, std::string, bool, bool>;
 
-inline PyModel make_model(const MassArray& mass, std::vector<fx::Effect> list, const Matrix& K, const Matrix& C,
+inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, const nvib::SparseMatrix& K,
+                          const nvib::SparseMatrix& C,
                           std::vector<std::string> dofs, py::object force, py::object tangent, bool uses_velocity,
                           bool uses_time, std::vector<LawSpec> laws) {
   nvib::Mass ms = make_mass(mass);
@@ -127,6 +135,28 @@ inline PyModel make_model(const MassArray& mass, std::vector<fx::Effect> list, c
     f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time});
   }
   return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(f), K, C), std::move(dofs)};
+}
+
+// (K_t, C_t) as sparse matrices: the linear parts plus the force's entries.
+template <class ModelT>
+py::tuple sparse_tangent(ModelT& md, const Vector& u, const Vector& v, double t) {
+  if (!md.has_sparse_tangent())
+    raise_value_error("model", "its force gives its tangent only as a dense matrix (a Python force callable)");
+  std::vector<nvib::Entry> ke, ce;
+  md.tangent_entries(ke, ce);
+  std::vector<double> kv(ke.size()), cv(ce.size());
+  nvib::Stats st;
+  md.tangent_values(u, v, t, kv.data(), cv.data(), st);
+  auto build = [&](const nvib::SparseMatrix& lin, const std::vector<nvib::Entry>& e, const std::vector<double>& x) {
+    std::vector<Eigen::Triplet<double, int>> all;
+    for (size_t k = 0; k < e.size(); ++k) all.emplace_back(e[k].row, e[k].col, x[k]);
+    for (Index j = 0; j < lin.outerSize(); ++j)
+      for (nvib::SparseMatrix::InnerIterator it(lin, j); it; ++it) all.emplace_back(it.row(), int(j), it.value());
+    nvib::SparseMatrix A(md.size(), md.size());
+    A.setFromTriplets(all.begin(), all.end());
+    return A;
+  };
+  return py::make_tuple(build(md.K(), ke, kv), build(md.C(), ce, cv));
 }
 
 inline void bind_models(py::module_& m) {
@@ -179,12 +209,22 @@ inline void bind_models(py::module_& m) {
                              [](const PyModel& p) { return p.visit([](auto& md) { return md.accounts_energy(); }); })
       .def_property_readonly("num_evaluated_effects", [](const PyModel& p) { return p.effects().evaluated().size(); })
       .def_property_readonly("effects", [](const PyModel& p) { return p.effects().effects(); })
+      .def_property_readonly("mass_kind", [](const PyModel& p) {
+        return p.visit([](auto& md) {
+          const auto k = md.mass().kind();
+          return k == nvib::Mass::Kind::diagonal ? "diagonal" : k == nvib::Mass::Kind::sparse ? "sparse" : "dense";
+        });
+      })
       .def_property_readonly("mass_matrix", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().matrix(); }); })
+      .def_property_readonly("mass_sparse", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().sparse_matrix(); }); })
       .def_property_readonly("K", [](const PyModel& p) {
-        return p.visit([](auto& md) { return md.has_K() ? md.K() : Matrix::Zero(md.size(), md.size()).eval(); });
+        return p.visit([](auto& md) { return md.has_K() ? md.K() : nvib::SparseMatrix(md.size(), md.size()); });
       })
       .def_property_readonly("C", [](const PyModel& p) {
-        return p.visit([](auto& md) { return md.has_C() ? md.C() : Matrix::Zero(md.size(), md.size()).eval(); });
+        return p.visit([](auto& md) { return md.has_C() ? md.C() : nvib::SparseMatrix(md.size(), md.size()); });
+      })
+      .def_property_readonly("has_sparse_tangent", [](const PyModel& p) {
+        return p.visit([](auto& md) { return md.has_sparse_tangent(); });
       })
       .def("potential", [](PyModel& p, const Vector& u, double t) { return p.visit([&](auto& md) { return md.potential(u, t); }); },
            py::arg("u"), py::arg("t") = 0.0)
@@ -209,7 +249,12 @@ inline void bind_models(py::module_& m) {
                return py::make_tuple(K, C);
              });
            },
-           py::arg("u"), py::arg("v"), py::arg("t"), "(K_t, C_t)")
+           py::arg("u"), py::arg("v"), py::arg("t"), "(K_t, C_t), dense")
+      .def("tangent_sparse",
+           [](PyModel& p, const Vector& u, const Vector& v, double t) {
+             return p.visit([&](auto& md) { return sparse_tangent(md, u, v, t); });
+           },
+           py::arg("u"), py::arg("v"), py::arg("t"), "(K_t, C_t), sparse (models whose tangent is known entry by entry)")
       .def("static_equilibrium",
            [](PyModel& p, double t, const Vector& guess, double rtol, int max_iter) {
              return p.visit([&](auto& md) { return nvib::static_equilibrium(md, t, guess, rtol, max_iter); });

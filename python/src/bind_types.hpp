@@ -43,6 +43,7 @@ inline py::dict stats_dict(const nvib::Stats& s) {
   d["num_linear_solves"] = s.num_linear_solves;
   d["num_expm"] = s.num_expm;
   d["wall_time"] = s.wall_time;
+  d["linear_solver"] = std::string(s.linear_solver);
   return d;
 }
 
@@ -86,6 +87,8 @@ inline void bind_types(py::module_& m) {
       .def_readonly("num_linear_solves", &Stats::num_linear_solves)
       .def_readonly("num_expm", &Stats::num_expm)
       .def_readonly("wall_time", &Stats::wall_time, "seconds")
+      .def_property_readonly("linear_solver", [](const Stats& s) { return std::string(s.linear_solver); },
+                             "the implicit schemes' linear solver: 'dense LU', 'sparse LDLT' or 'sparse LU' ('' if none)")
       .def("as_dict", &stats_dict)
       .def("__repr__", [](const Stats& s) {
         std::string out;

@@ -198,10 +198,8 @@ def _closed_form(model: Model, u0: np.ndarray, v0: np.ndarray):
         return None
     m = float(model.mass_matrix[0, 0])
     x0, xv0 = float(u0[0]), float(v0[0])
-    K0 = np.asarray(model._core.K)
-    C0 = np.asarray(model._core.C)
-    k_lin = float(K0[0, 0]) if K0.size else 0.0
-    c_lin = float(C0[0, 0]) if C0.size else 0.0
+    k_lin = float(model.K.toarray()[0, 0])
+    c_lin = float(model.C.toarray()[0, 0])
     nonlinear = [e for e in effects if not e.is_linear]
     if not nonlinear:
         if k_lin <= 0:

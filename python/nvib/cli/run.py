@@ -186,8 +186,11 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
                            f"t_end = {t_end:g} s; {saved}"))
     lines.append(("status", res.status.name))
     lines.append(("wall time", f"{c.seconds(elapsed)} (integrator loop {c.seconds(stats['wall_time'])})"))
-    counters = [(k.removeprefix("num_"), v) for k, v in stats.items() if k not in ("wall_time", "num_steps")]
+    counters = [(k.removeprefix("num_"), v) for k, v in stats.items()
+                if k not in ("wall_time", "num_steps", "linear_solver")]
     lines.append(("counters", ", ".join(f"{k} {v}" for k, v in counters)))
+    if stats["linear_solver"]:
+        lines.append(("linear solver", f"{stats['linear_solver']} ({model.n} DOFs)"))
     if len(res.t):
         j = res.dofs.index(dof)
         u, v, a = (float(x[-1, j]) + 0.0 for x in (res.u, res.v, res.a))  # + 0.0: no "-0"

@@ -13,6 +13,7 @@
 
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "mass.hpp"
 #include "types.hpp"
@@ -26,6 +27,8 @@ struct NoForce {
     K.setZero();
     C.setZero();
   }
+  void tangent_entries(std::vector<Entry>&, std::vector<Entry>&) const {}
+  void tangent_values(const CVecRef&, const CVecRef&, double, double*, double*) const {}
   bool uses_velocity() const { return false; }
   bool uses_time() const { return false; }
   bool is_linear() const { return true; }
@@ -62,6 +65,18 @@ NVIB_OPTIONAL_FLAG(uses_time, true)
 NVIB_OPTIONAL_FLAG(is_linear, false)
 NVIB_OPTIONAL_FLAG(has_tangent, has_tangent_method<F>::value)
 NVIB_OPTIONAL_FLAG(accounts_energy, true)
+template <class F, class = void>
+struct has_sparse_tangent_method : std::false_type {};
+template <class F>
+struct has_sparse_tangent_method<
+    F, std::void_t<decltype(std::declval<const F&>().tangent_entries(std::declval<std::vector<Entry>&>(),
+                                                                     std::declval<std::vector<Entry>&>())),
+                   decltype(std::declval<F&>().tangent_values(std::declval<const CVecRef&>(),
+                                                              std::declval<const CVecRef&>(), 0.0,
+                                                              std::declval<double*>(), std::declval<double*>()))>>
+    : std::true_type {};
+// A force with the entry-by-entry tangent may still switch it off at run time.
+NVIB_OPTIONAL_FLAG(has_sparse_tangent, has_sparse_tangent_method<F>::value)
 #undef NVIB_OPTIONAL_FLAG
 
 // Energy accounting of a force: potential(u, t), input_power(u, v, t), dissipated_power(v).
@@ -89,25 +104,15 @@ class Model {
 
   Model() = default;
 
-  // K and C may be empty (0x0) when absent.
-  Model(Mass mass, Matrix K, Matrix C, Force force = Force{})
+  // K and C may be empty (0x0) when absent; they are kept sparse (compressed columns).
+  Model(Mass mass, SparseMatrix K, SparseMatrix C, Force force = Force{})
       : mass_(std::move(mass)), K_(std::move(K)), C_(std::move(C)), f_(std::move(force)) {
     const Index n = mass_.size();
     NVIB_CHECK(n > 0, "mass", "the model has no degree of freedom");
-    has_K_ = K_.size() > 0;
-    has_C_ = C_.size() > 0;
-    if (has_K_) {
-      NVIB_CHECK(K_.rows() == n && K_.cols() == n, "K",
-                      "expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
-                          "), got (" + std::to_string(K_.rows()) + ", " + std::to_string(K_.cols()) + ")");
-      NVIB_CHECK(K_.allFinite(), "K", "the matrix has non-finite entries");
-    }
-    if (has_C_) {
-      NVIB_CHECK(C_.rows() == n && C_.cols() == n, "C",
-                      "expected shape (" + std::to_string(n) + ", " + std::to_string(n) +
-                          "), got (" + std::to_string(C_.rows()) + ", " + std::to_string(C_.cols()) + ")");
-      NVIB_CHECK(C_.allFinite(), "C", "the matrix has non-finite entries");
-    }
+    has_K_ = check_linear_part(K_, "K", n);
+    has_C_ = check_linear_part(C_, "C", n);
+    absK_ = K_.cwiseAbs();
+    absC_ = C_.cwiseAbs();
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
     is_linear_ = traits::is_linear(f_);
@@ -117,15 +122,18 @@ class Model {
     fp_.resize(n);
     fm_.resize(n);
   }
+  // Dense K and C (small models, tests): stored sparse, exact zeros dropped.
+  Model(Mass mass, const Matrix& K, const Matrix& C, Force force = Force{})
+      : Model(std::move(mass), to_sparse(K, "K"), to_sparse(C, "C"), std::move(force)) {}
 
-  Model(Mass mass, Force force) : Model(std::move(mass), Matrix(), Matrix(), std::move(force)) {}
+  Model(Mass mass, Force force) : Model(std::move(mass), SparseMatrix(), SparseMatrix(), std::move(force)) {}
 
   Index size() const { return mass_.size(); }
   const Mass& mass() const { return mass_; }
   bool has_K() const { return has_K_; }
   bool has_C() const { return has_C_; }
-  const Matrix& K() const { return K_; }
-  const Matrix& C() const { return C_; }
+  const SparseMatrix& K() const { return K_; }
+  const SparseMatrix& C() const { return C_; }
   Force& nonlinear_force() { return f_; }
   const Force& nonlinear_force() const { return f_; }
 
@@ -134,6 +142,11 @@ class Model {
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return is_linear_; }
   bool has_analytic_tangent() const { return traits::has_tangent_method<Force>::value && traits::has_tangent(f_); }
+  // The force gives its tangent entry by entry (effects, laws on measures): sparse linear solvers apply.
+  bool has_sparse_tangent() const {
+    if constexpr (traits::has_sparse_tangent_method<Force>::value) return traits::has_sparse_tangent(f_);
+    return false;
+  }
 
   // out = K u + C v + f(u, v, t): everything on the left of M a + ... = 0.
   void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) {
@@ -159,8 +172,8 @@ class Model {
       eval_f(u, v, t, out);
       out = out.cwiseAbs();
     }
-    if (has_K_) out.noalias() += K_.cwiseAbs() * u.cwiseAbs();
-    if (has_C_) out.noalias() += C_.cwiseAbs() * v.cwiseAbs();
+    if (has_K_) out.noalias() += absK_ * u.cwiseAbs();
+    if (has_C_) out.noalias() += absC_ * v.cwiseAbs();
   }
 
   // ---- energy accounting ----
@@ -209,6 +222,15 @@ class Model {
     if (has_K_) Kt += K_;
     if (has_C_) Ct += C_;
   }
+  // The nonlinear force's tangent entries (K and C, in a fixed order) and their values at (u, v, t);
+  // K() and C() hold the linear parts. Only where has_sparse_tangent().
+  void tangent_entries(std::vector<Entry>& K, std::vector<Entry>& C) const {
+    if constexpr (traits::has_sparse_tangent_method<Force>::value) f_.tangent_entries(K, C);
+  }
+  void tangent_values(const CVecRef& u, const CVecRef& v, double t, double* K, double* C, Stats& st) {
+    ++st.num_tangent_evals;
+    if constexpr (traits::has_sparse_tangent_method<Force>::value) f_.tangent_values(u, v, t, K, C);
+  }
 
  private:
   void eval_f(const CVecRef& u, const CVecRef& v, double t, VecRef out) { f_(u, v, t, out); }
@@ -238,8 +260,24 @@ class Model {
     }
   }
 
+  static bool check_linear_part(SparseMatrix& A, const char* name, Index n) {
+    if (A.rows() == 0 && A.cols() == 0) return false;
+    NVIB_CHECK(A.rows() == n && A.cols() == n, name,
+               "expected shape (" + std::to_string(n) + ", " + std::to_string(n) + "), got (" +
+                   std::to_string(A.rows()) + ", " + std::to_string(A.cols()) + ")");
+    A.makeCompressed();
+    for (Index k = 0; k < A.nonZeros(); ++k)
+      NVIB_CHECK(std::isfinite(A.valuePtr()[k]), name, "the matrix has non-finite entries");
+    return A.nonZeros() > 0;
+  }
+  static SparseMatrix to_sparse(const Matrix& A, const char* name) {
+    if (A.size() == 0) return SparseMatrix();
+    NVIB_CHECK(A.allFinite(), name, "the matrix has non-finite entries");
+    return A.sparseView(1.0, 0.0);  // every nonzero kept
+  }
+
   Mass mass_;
-  Matrix K_, C_;
+  SparseMatrix K_, C_, absK_, absC_;
   Force f_{};
   bool has_K_ = false, has_C_ = false;
   bool uses_velocity_ = false, uses_time_ = false, is_linear_ = true;
@@ -249,10 +287,17 @@ class Model {
 
 // Deduction helpers.
 template <class Force>
-Model<Force> make_model(Mass mass, Force force, Matrix K = Matrix(), Matrix C = Matrix()) {
+Model<Force> make_model(Mass mass, Force force, const Matrix& K = Matrix(), const Matrix& C = Matrix()) {
+  return Model<Force>(std::move(mass), K, C, std::move(force));
+}
+template <class Force>
+Model<Force> make_model(Mass mass, Force force, SparseMatrix K, SparseMatrix C = SparseMatrix()) {
   return Model<Force>(std::move(mass), std::move(K), std::move(C), std::move(force));
 }
-inline Model<NoForce> make_linear_model(Mass mass, Matrix K, Matrix C = Matrix()) {
+inline Model<NoForce> make_linear_model(Mass mass, const Matrix& K, const Matrix& C = Matrix()) {
+  return Model<NoForce>(std::move(mass), K, C, NoForce{});
+}
+inline Model<NoForce> make_linear_model(Mass mass, SparseMatrix K, SparseMatrix C = SparseMatrix()) {
   return Model<NoForce>(std::move(mass), std::move(K), std::move(C), NoForce{});
 }
 

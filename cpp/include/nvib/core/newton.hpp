@@ -90,7 +90,7 @@ struct Residual {
   double scale = 0.0;  // the largest inertia or force term: the tolerance is atol + rtol scale
 };
 
-template <class LinearSolver = DenseLinearSolver>
+template <class LinearSolver = AutoLinearSolver>
 class NewtonSolver {
  public:
   NewtonSolver() = default;

@@ -15,7 +15,7 @@ namespace nvib {
 
 template <class ModelT>
 class StaticEquilibrium {
-  using Solver = NewtonSolver<DenseLinearSolver>;
+  using Solver = NewtonSolver<AutoLinearSolver>;
   friend Solver;
 
  public:
@@ -55,11 +55,12 @@ class StaticEquilibrium {
   IterationMatrix start_matrix() const { return matrix(); }
   // mu ~ a squared frequency: a thousandth of the stiffest DOF's, or 1 rad^2/s^2
   // where nothing is stiff yet (a body on open contacts).
-  bool regularize(IterationMatrix& im, const DenseLinearSolver& ls) const {
+  bool regularize(IterationMatrix& im, AutoLinearSolver& ls) const {
     if (im.cM > 0.0) return false;
     const Vector& m = model_.mass().diagonal_entries();
+    const Vector k = ls.tangent_diagonal();
     double ratio = 0.0;
-    for (Index i = 0; i < m.size(); ++i) ratio = std::max(ratio, std::abs(ls.K()(i, i)) / m[i]);
+    for (Index i = 0; i < m.size(); ++i) ratio = std::max(ratio, std::abs(k[i]) / m[i]);
     im.cM = ratio > 0.0 ? 1e-3 * ratio : 1.0;
     return true;
   }
@@ -88,7 +89,7 @@ Vector static_equilibrium(ModelT& model, double t, const Vector& guess, double r
   opt.atol = 0.0;
   opt.max_iter = max_iter;
   opt.validate();
-  NewtonSolver<DenseLinearSolver> newton(opt, model.size());
+  NewtonSolver<AutoLinearSolver> newton(opt, model.size());
   StaticEquilibrium<ModelT> problem(model, t, guess);
   Vector u(model.size());
   Stats st;

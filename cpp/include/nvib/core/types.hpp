@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 
 #include <cmath>
 #include <cstdint>
@@ -22,6 +23,13 @@ using VecRef = Eigen::Ref<Vector>;
 using CVecRef = Eigen::Ref<const Vector>;
 using MatRef = Eigen::Ref<Matrix>;
 using Index = Eigen::Index;
+// Compressed columns, 32-bit indices (a model of up to 2^31 stored entries).
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// One stored entry (row, column) of a sparse tangent.
+struct Entry {
+  int row, col;
+};
 
 // Counters summed over a whole solve (never reset per step).
 struct Stats {
@@ -34,6 +42,7 @@ struct Stats {
   std::int64_t num_linear_solves = 0;
   std::int64_t num_expm = 0;
   double wall_time = 0.0;  // seconds
+  const char* linear_solver = "";  // of the implicit schemes' Newton iteration: "dense LU", "sparse LDLT", ...
 
   Stats& operator+=(const Stats& o) { return combine(o, 1); }
   Stats& operator-=(const Stats& o) { return combine(o, -1); }
@@ -49,6 +58,7 @@ struct Stats {
     num_linear_solves += sign * o.num_linear_solves;
     num_expm += sign * o.num_expm;
     wall_time += sign * o.wall_time;
+    if (sign > 0 && *o.linear_solver) linear_solver = o.linear_solver;
     return *this;
   }
 };

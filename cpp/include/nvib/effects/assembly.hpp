@@ -4,6 +4,7 @@
 // or Python callables through the binding).
 #pragma once
 
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -23,8 +24,12 @@ class EffectsPlus {
  public:
   EffectsPlus() = default;
   EffectsPlus(EffectSet effects, Extra extra, Index n)
-      : effects_(std::move(effects)), extra_(std::move(extra)), work_(Vector::Zero(n)), K2_(Matrix::Zero(n, n)),
-        C2_(Matrix::Zero(n, n)) {}
+      : effects_(std::move(effects)), extra_(std::move(extra)), work_(Vector::Zero(n)) {
+    if (!has_sparse_tangent() || n <= Mass::kDenseMax) {  // for the dense tangent (small models)
+      K2_.setZero(n, n);
+      C2_.setZero(n, n);
+    }
+  }
 
   const EffectSet& effects() const { return effects_; }
   Extra& extra() { return extra_; }
@@ -43,6 +48,21 @@ class EffectsPlus {
       K += K2_;
       C += C2_;
     }
+  }
+  // Entry by entry only if the extra force can too (Python laws on measures; not a vector callable).
+  bool has_sparse_tangent() const {
+    if constexpr (traits::has_sparse_tangent_method<Extra>::value) return traits::has_sparse_tangent(extra_);
+    return false;
+  }
+  void tangent_entries(std::vector<Entry>& K, std::vector<Entry>& C) const {
+    effects_.tangent_entries(K, C);
+    ke_ = K.size();
+    ce_ = C.size();
+    if constexpr (traits::has_sparse_tangent_method<Extra>::value) extra_.tangent_entries(K, C);
+  }
+  void tangent_values(const CVecRef& u, const CVecRef& v, double t, double* K, double* C) {
+    effects_.tangent_values(u, v, t, K, C);
+    if constexpr (traits::has_sparse_tangent_method<Extra>::value) extra_.tangent_values(u, v, t, K + ke_, C + ce_);
   }
   void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
     effects_.magnitude(u, v, t, out);
@@ -77,41 +97,60 @@ class EffectsPlus {
   EffectSet effects_;
   Extra extra_;
   Vector work_;     // the extra force
-  Matrix K2_, C2_;  // the extra tangent
+  Matrix K2_, C2_;  // the extra tangent (dense)
+  mutable size_t ke_ = 0, ce_ = 0;  // where the extra force's tangent entries start
 };
 
 namespace detail_ {
-// K_extra, C_extra plus the springs and dampers of the list; the rest in the EffectSet.
-inline std::pair<LinearParts, EffectSet> assemble(const Mass& mass, std::vector<Effect> list, const Matrix& K_extra,
-                                                  const Matrix& C_extra) {
+// K_extra + C_extra (dense or sparse) plus the springs and dampers of the list, summed into sparse K
+// and C; the rest in the EffectSet.
+inline SparseMatrix to_sparse(const SparseMatrix& A) { return A; }
+inline SparseMatrix to_sparse(const Matrix& A) {
+  NVIB_CHECK(A.allFinite(), "K, C", "the matrix has non-finite entries");
+  return A.sparseView(1.0, 0.0);
+}
+
+struct Assembled {
+  SparseMatrix K, C;
+  EffectSet set;
+};
+
+template <class MatK, class MatC>
+Assembled assemble(const Mass& mass, std::vector<Effect> list, const MatK& K_extra, const MatC& C_extra) {
   const Index n = mass.size();
   LinearParts lin;
-  if (K_extra.size() > 0) {
-    NVIB_CHECK(K_extra.rows() == n && K_extra.cols() == n, "K", "wrong shape");
-    lin.K = K_extra;
-  }
-  if (C_extra.size() > 0) {
-    NVIB_CHECK(C_extra.rows() == n && C_extra.cols() == n, "C", "wrong shape");
-    lin.C = C_extra;
-  }
+  auto add = [&](const auto& A, const char* name, std::vector<Eigen::Triplet<double, int>>& out) {
+    if (A.size() == 0) return;
+    NVIB_CHECK(A.rows() == n && A.cols() == n, name,
+               "expected shape (" + std::to_string(n) + ", " + std::to_string(n) + "), got (" +
+                   std::to_string(A.rows()) + ", " + std::to_string(A.cols()) + ")");
+    const SparseMatrix S = to_sparse(A);
+    for (Index j = 0; j < S.outerSize(); ++j)
+      for (SparseMatrix::InnerIterator it(S, j); it; ++it) out.emplace_back(it.row(), static_cast<int>(j), it.value());
+  };
+  add(K_extra, "K", lin.k);
+  add(C_extra, "C", lin.c);
   EffectSet set(std::move(list), mass, &lin);
-  return {std::move(lin), std::move(set)};
+  return {LinearParts::to_matrix(lin.k, n), LinearParts::to_matrix(lin.c, n), std::move(set)};
 }
 }  // namespace detail_
 
-inline Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, Matrix K_extra = Matrix(),
-                                          Matrix C_extra = Matrix()) {
-  auto [lin, set] = detail_::assemble(mass, std::move(list), K_extra, C_extra);
-  return Model<EffectSet>(std::move(mass), std::move(lin.K), std::move(lin.C), std::move(set));
+template <class MatK = Matrix, class MatC = Matrix,
+          class = std::enable_if_t<std::is_base_of_v<Eigen::EigenBase<MatK>, MatK>>>
+Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, const MatK& K_extra = MatK(),
+                                   const MatC& C_extra = MatC()) {
+  auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra);
+  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set));
 }
 
-template <class Extra>
+template <class Extra, class MatK = Matrix, class MatC = Matrix,
+          class = std::enable_if_t<!std::is_base_of_v<Eigen::EigenBase<Extra>, Extra>>>
 Model<EffectsPlus<Extra>> make_effect_model(Mass mass, std::vector<Effect> list, Extra extra,
-                                            Matrix K_extra = Matrix(), Matrix C_extra = Matrix()) {
+                                            const MatK& K_extra = MatK(), const MatC& C_extra = MatC()) {
   const Index n = mass.size();
-  auto [lin, set] = detail_::assemble(mass, std::move(list), K_extra, C_extra);
-  return Model<EffectsPlus<Extra>>(std::move(mass), std::move(lin.K), std::move(lin.C),
-                                   EffectsPlus<Extra>(std::move(set), std::move(extra), n));
+  auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra);
+  return Model<EffectsPlus<Extra>>(std::move(mass), std::move(a.K), std::move(a.C),
+                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n));
 }
 
 }  // namespace effects

@@ -158,6 +158,38 @@ void add_tangents(const Arrays& a, const Group& g, const double* u, const double
   }
 }
 
+// The entries (row, column) of the tangent of every term of the group, in the order
+// tangent_values() writes them: g_i g_j for i, j over the measure, into K (displacement laws) or C
+// (velocity laws); nothing for a load.
+template <class L>
+void tangent_entries(const Arrays& a, const Group& g, std::vector<Entry>& K, std::vector<Entry>& C) {
+  if constexpr (L::is_load) return;
+  std::vector<Entry>& out = L::uses_velocity ? C : K;
+  for (const Term* c = g.begin; c != g.end; ++c)
+    for (std::int32_t i = c->first; i < c->last; ++i)
+      for (std::int32_t j = c->first; j < c->last; ++j)
+        out.push_back({static_cast<int>(a.idx[static_cast<size_t>(i)]), static_cast<int>(a.idx[static_cast<size_t>(j)])});
+}
+
+// Their values: df/dd g_i g_j (or df/dd'), advancing K or C past the group's entries.
+template <class L>
+void tangent_values(const Arrays& a, const Group& g, const double* u, const double* v, double t, double*& K,
+                    double*& C) {
+  if constexpr (L::is_load) return;
+  double*& out = L::uses_velocity ? C : K;
+  const double* x = L::uses_velocity ? v : u;
+  for (const Term* c = g.begin; c != g.end; ++c) {
+    double s;
+    if constexpr (L::uses_velocity)
+      s = L::damping(c->p, a.measure(*c, x));
+    else
+      s = L::stiffness(c->p, a.measure(*c, x), t);
+    for (std::int32_t i = c->first; i < c->last; ++i)
+      for (std::int32_t j = c->first; j < c->last; ++j)
+        *out++ = s * a.coef[static_cast<size_t>(i)] * a.coef[static_cast<size_t>(j)];
+  }
+}
+
 }  // namespace compiled
 }  // namespace effects
 }  // namespace nvib

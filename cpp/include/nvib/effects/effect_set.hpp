@@ -25,9 +25,19 @@
 namespace nvib {
 namespace effects {
 
-// Where linear springs and dampers are assembled (each matrix empty if nothing went into it).
+// Where linear springs and dampers are assembled: their entries (row, column, value), summed into
+// sparse K and C by to_matrices() (each empty if nothing went into it).
 struct LinearParts {
-  Matrix K, C;
+  std::vector<Eigen::Triplet<double, int>> k, c;
+
+  static SparseMatrix to_matrix(const std::vector<Eigen::Triplet<double, int>>& entries, Index n) {
+    if (entries.empty()) return SparseMatrix();
+    SparseMatrix A(n, n);
+    A.setFromTriplets(entries.begin(), entries.end());  // duplicates summed
+    A.prune(0.0);
+    A.makeCompressed();
+    return A;
+  }
 };
 
 class EffectSet {
@@ -47,7 +57,7 @@ class EffectSet {
       uses_time_ = uses_time_ || e.uses_time();
       linear_ = linear_ && e.is_linear();
       if (linear && (e.law == Law::spring || e.law == Law::damper)) {
-        assemble(e, e.law == Law::spring ? linear->K : linear->C, n);
+        assemble(e, e.law == Law::spring ? linear->k : linear->c);
         continue;
       }
       if (e.law == Law::constant_force) {
@@ -109,6 +119,15 @@ class EffectSet {
     }
     for (const compiled::Group& g : groups_)
       dispatch(g.law, [&](auto L) { compiled::add_tangents<decltype(L)>(a_, g, u.data(), v.data(), t, k, c, ld); });
+  }
+  // The tangent entry by entry (sparse models): entries once, values at each state, in the same order.
+  void tangent_entries(std::vector<Entry>& K, std::vector<Entry>& C) const {
+    for (const compiled::Group& g : groups_)
+      dispatch(g.law, [&](auto L) { compiled::tangent_entries<decltype(L)>(a_, g, K, C); });
+  }
+  void tangent_values(const CVecRef& u, const CVecRef& v, double t, double* K, double* C) const {
+    for (const compiled::Group& g : groups_)
+      dispatch(g.law, [&](auto L) { compiled::tangent_values<decltype(L)>(a_, g, u.data(), v.data(), t, K, C); });
   }
   // out_i = |constant loads|_i + sum over terms of |g_i f|: the round-off scale of the force.
   void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
@@ -179,10 +198,11 @@ class EffectSet {
         e.coef.push_back(w[d]);
       }
   }
-  static void assemble(const Effect& e, Matrix& A, Index n) {
-    if (A.size() == 0) A = Matrix::Zero(n, n);
+  static void assemble(const Effect& e, std::vector<Eigen::Triplet<double, int>>& entries) {
     for (size_t i = 0; i < e.index.size(); ++i)
-      for (size_t j = 0; j < e.index.size(); ++j) A(e.index[i], e.index[j]) += e.p0 * e.coef[i] * e.coef[j];
+      for (size_t j = 0; j < e.index.size(); ++j)
+        entries.emplace_back(static_cast<int>(e.index[i]), static_cast<int>(e.index[j]),
+                             e.p0 * e.coef[i] * e.coef[j]);
   }
 
   // Flat, grouped form of active_ (rebuilt on copy: terms point at active_'s signals).

@@ -1,72 +1,88 @@
 // Linear solvers of the Newton component. A policy owns the iteration matrix
 // S = cM M + cC C_t + cK K_t and its factorisation:
-//   void resize(Index n)
 //   bool factorize(model, IterationMatrix, Stats&, bool finite_difference)   false if S is singular
 //   void solve_in_place(Vector& x)          x <- S^{-1} x
 //   void multiply_C(const Vector& x, Vector& out) const   out = C_t x (the last tangent)
+//   Vector tangent_diagonal()                           the diagonal of the last K_t
 //   Index first_nonfinite_tangent_row() const             -1 if the last tangent is finite
-// Dense LU here; sparse factorisations are further policies with the same face.
+// DenseLinearSolver (dense_solver.hpp), SparseLinearSolver (sparse_solver.hpp),
+// and AutoLinearSolver, which chooses between them by size and density and
+// says which in Stats::linear_solver.
 #pragma once
 
+#include <string>
+
+#include "../core/mass.hpp"
 #include "../core/types.hpp"
-#include "dense_lu.hpp"
+#include "dense_solver.hpp"
+#include "iteration_matrix.hpp"
+#include "sparse_solver.hpp"
 
 namespace nvib {
 
-// S = cM M + cC C_t + cK K_t with the tangents taken at (u, v, t).
-struct IterationMatrix {
-  double cM = 0.0, cC = 0.0, cK = 1.0;
-  const Vector* u = nullptr;
-  const Vector* v = nullptr;
-  double t = 0.0;
-};
-
-class DenseLinearSolver {
+class AutoLinearSolver {
  public:
-  static constexpr const char* name = "dense LU";
+  // Up to this size the dense LU is used whatever the pattern (it is faster there);
+  // up to kDenseFullMax also when S is more than a quarter full.
+  static constexpr Index kDenseBelow = 64, kDenseFullMax = 500;
 
-  void resize(Index n) {
-    Kt_.setZero(n, n);
-    Ct_.setZero(n, n);
-    lu_.resize(n);
-  }
+  void resize(Index) { chosen_ = false; }
+  const char* name() const { return !chosen_ ? "" : dense_ ? DenseLinearSolver::name : sparse_.name(); }
+  bool is_dense() const { return dense_; }
 
-  // S = (cK K_t + cM M) + cC C_t, assembled in the factorisation's own storage.
   template <class ModelT>
   bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference) {
-    model.tangent(*im.u, *im.v, im.t, Kt_, Ct_, st, finite_difference);
-    Matrix& S = lu_.assembly();
-    const Index n = S.rows();
-    const double *K = Kt_.data(), *C = Ct_.data();
-    double* out = S.data();
-    const Mass& mass = model.mass();
-    for (Index ij = 0; ij < n * n; ++ij) out[ij] = im.cK * K[ij];
-    if (mass.is_diagonal()) {
-      const double* m = mass.diagonal_entries().data();
-      for (Index i = 0; i < n; ++i) out[i + i * n] += im.cM * m[i];
-    } else {
-      for (Index j = 0; j < n; ++j)
-        for (Index i = 0; i < n; ++i) out[i + j * n] += im.cM * mass.entry(i, j);
-    }
-    if (model.uses_velocity())
-      for (Index ij = 0; ij < n * n; ++ij) out[ij] += im.cC * C[ij];
-    return lu_.factorize_assembled();
+    if (!chosen_) choose(model, finite_difference);
+    return dense_ ? dense_solver_.factorize(model, im, st, finite_difference) : sparse_.factorize(model, im, st);
   }
-
-  void solve_in_place(Vector& x) const { lu_.solve_in_place(x); }
-  void multiply_C(const Vector& x, Vector& out) const { out.noalias() = Ct_ * x; }
-  const Matrix& K() const { return Kt_; }
-
+  void solve_in_place(Vector& x) const {
+    if (dense_)
+      dense_solver_.solve_in_place(x);
+    else
+      sparse_.solve_in_place(x);
+  }
+  void multiply_C(const Vector& x, Vector& out) const {
+    if (dense_)
+      dense_solver_.multiply_C(x, out);
+    else
+      sparse_.multiply_C(x, out);
+  }
+  Vector tangent_diagonal() { return dense_ ? dense_solver_.tangent_diagonal() : sparse_.tangent_diagonal(); }
   Index first_nonfinite_tangent_row() const {
-    if (Kt_.allFinite() && Ct_.allFinite()) return -1;
-    Index dof = 0;
-    while (dof + 1 < Kt_.rows() && Kt_.row(dof).allFinite() && Ct_.row(dof).allFinite()) ++dof;
-    return dof;
+    return dense_ ? dense_solver_.first_nonfinite_tangent_row() : sparse_.first_nonfinite_tangent_row();
   }
 
  private:
-  Matrix Kt_, Ct_;
-  DenseLU lu_;
+  template <class ModelT>
+  void choose(const ModelT& model, bool finite_difference) {
+    const Index n = model.size();
+    chosen_ = true;
+    const bool sparse_possible = model.has_sparse_tangent() && !finite_difference;
+    if (!sparse_possible) {
+      const double mb = 16.0 * static_cast<double>(n) * static_cast<double>(n) / 1e6;
+      NVIB_CHECK(n <= Mass::kDenseMax, finite_difference ? "jacobian" : "model",
+                 finite_difference
+                     ? "a finite-difference tangent differentiates the whole force, a dense " + std::to_string(n) +
+                           " x " + std::to_string(n) + " matrix (" + detail::fmt(mb) + " MB); above " +
+                           std::to_string(Mass::kDenseMax) + " DOFs use jacobian='analytic'"
+                     : "the force of this model gives its tangent only as a dense " + std::to_string(n) + " x " +
+                           std::to_string(n) + " matrix (" + detail::fmt(mb) + " MB); above " +
+                           std::to_string(Mass::kDenseMax) +
+                           " DOFs declare its forces as effects (their tangent is sparse), or use an explicit scheme");
+      dense_ = true;
+    } else if (n <= kDenseBelow) {
+      dense_ = true;
+    } else {
+      sparse_.setup(model);
+      const double fill = static_cast<double>(sparse_.nonzeros()) / (static_cast<double>(n) * static_cast<double>(n));
+      dense_ = n <= kDenseFullMax && fill > 0.25;
+    }
+    if (dense_) dense_solver_.resize(n);
+  }
+
+  bool chosen_ = false, dense_ = true;
+  DenseLinearSolver dense_solver_;
+  SparseLinearSolver sparse_;
 };
 
 }  // namespace nvib

@@ -125,7 +125,7 @@ template <class ModelT>
 class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
   NVIB_STEPPER_STATE(Base);
-  using Solver = NewtonSolver<DenseLinearSolver>;
+  using Solver = NewtonSolver<AutoLinearSolver>;
   friend Solver;
 
  public:
