@@ -43,6 +43,7 @@ namespace nvib {
 enum class NewtonMode { newton, modified, initial, incremental, one_iteration };
 enum class Jacobian { analytic, finite_difference };
 
+
 inline const char* to_string(NewtonMode m) {
   switch (m) {
     case NewtonMode::newton: return "newton";
@@ -55,18 +56,21 @@ inline const char* to_string(NewtonMode m) {
 }
 inline const char* to_string(Jacobian j) { return j == Jacobian::analytic ? "analytic" : "finite_difference"; }
 
+
 // Options of the iteration: one validated object.
 struct Newton {
   static constexpr const char* name = "Newton";
   static constexpr const char* doc =
       "Options of the Newton iteration of the implicit schemes: mode ('newton', 'modified', 'initial', "
       "'incremental' or 'one_iteration'), max_iter, rtol (relative to the force scale of the step), atol "
-      "(force units) and jacobian ('analytic' or 'finite_difference').";
+      "(force units), jacobian ('analytic' or 'finite_difference') and linear_solver ('auto', 'dense' or "
+      "'sparse'; Stats.linear_solver says which was used).";
   NewtonMode mode = NewtonMode::newton;
   int max_iter = 20;
   double rtol = 1e-10;  // relative to the force scale of the step
   double atol = 1e-12;  // absolute, in force units
   Jacobian jacobian = Jacobian::analytic;
+  LinearSolverChoice linear_solver = LinearSolverChoice::automatic;
 
   template <class Self, class V>
   static void parameters(Self& s, V&& v) {
@@ -76,6 +80,8 @@ struct Newton {
     v(s.rtol, param::real("rtol", "residual tolerance relative to the force scale of the step").at_least(0.0));
     v(s.atol, param::real("atol", "absolute residual tolerance, in force units").at_least(0.0));
     v(s.jacobian, param::choice("jacobian", "how the tangent is obtained", {"analytic", "finite_difference"}));
+    v(s.linear_solver, param::choice("linear_solver", "dense LU, sparse LDLT/LU, or chosen by size and density",
+                                     {"auto", "dense", "sparse"}));
   }
   void validate() const {
     param::check_ranges(*this);
@@ -219,7 +225,7 @@ class NewtonSolver {
 
   template <class Problem, class ModelT>
   Status factorize(Problem& p, ModelT& model, const IterationMatrix& im, double t, std::int64_t step, Stats& st) {
-    const bool regular = ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference);
+    const bool regular = ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference, opt_.linear_solver);
     ++st.num_factorizations;
     factorized_ = true;
     if (regular) return Status::success;

@@ -96,6 +96,7 @@ inline std::string newton_repr(const Newton& n) {
   if (n.rtol != d.rtol) s += ", rtol=" + detail::repr(n.rtol);
   if (n.atol != d.atol) s += ", atol=" + detail::repr(n.atol);
   if (n.jacobian != d.jacobian) s += std::string(", jacobian='") + to_string(n.jacobian) + "'";
+  if (n.linear_solver != d.linear_solver) s += std::string(", linear_solver='") + to_string(n.linear_solver) + "'";
   return s + ")";
 }
 

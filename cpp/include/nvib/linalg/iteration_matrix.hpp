@@ -13,4 +13,11 @@ struct IterationMatrix {
   double t = 0.0;
 };
 
+// Which linear solver the Newton component uses: automatic (a dense LU for small or nearly full
+// iteration matrices, sparse otherwise: AutoLinearSolver), or forced.
+enum class LinearSolverChoice { automatic, dense, sparse };
+inline const char* to_string(LinearSolverChoice c) {
+  return c == LinearSolverChoice::automatic ? "auto" : c == LinearSolverChoice::dense ? "dense" : "sparse";
+}
+
 }  // namespace nvib

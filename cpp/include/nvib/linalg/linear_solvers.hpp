@@ -31,8 +31,9 @@ class AutoLinearSolver {
   bool is_dense() const { return dense_; }
 
   template <class ModelT>
-  bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference) {
-    if (!chosen_) choose(model, finite_difference);
+  bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference,
+                 LinearSolverChoice choice = LinearSolverChoice::automatic) {
+    if (!chosen_) choose(model, finite_difference, choice);
     return dense_ ? dense_solver_.factorize(model, im, st, finite_difference) : sparse_.factorize(model, im, st);
   }
   void solve_in_place(Vector& x) const {
@@ -54,11 +55,15 @@ class AutoLinearSolver {
 
  private:
   template <class ModelT>
-  void choose(const ModelT& model, bool finite_difference) {
+  void choose(const ModelT& model, bool finite_difference, LinearSolverChoice choice) {
     const Index n = model.size();
     chosen_ = true;
     const bool sparse_possible = model.has_sparse_tangent() && !finite_difference;
-    if (!sparse_possible) {
+    NVIB_CHECK(choice != LinearSolverChoice::sparse || sparse_possible, "linear_solver",
+               finite_difference ? "'sparse' needs jacobian='analytic' (a finite-difference tangent is dense)"
+                                 : "'sparse' needs a model whose tangent is known entry by entry (declared effects "
+                                   "and laws on measures; not a force callable)");
+    if (!sparse_possible || choice == LinearSolverChoice::dense) {
       const double mb = 16.0 * static_cast<double>(n) * static_cast<double>(n) / 1e6;
       NVIB_CHECK(n <= Mass::kDenseMax, finite_difference ? "jacobian" : "model",
                  finite_difference
@@ -70,6 +75,9 @@ class AutoLinearSolver {
                            std::to_string(Mass::kDenseMax) +
                            " DOFs declare its forces as effects (their tangent is sparse), or use an explicit scheme");
       dense_ = true;
+    } else if (choice == LinearSolverChoice::sparse) {
+      sparse_.setup(model);
+      dense_ = false;
     } else if (n <= kDenseBelow) {
       dense_ = true;
     } else {

@@ -1,0 +1,161 @@
+// Sparse models: the sparse linear solvers (LDL^T for symmetric iteration
+// matrices, LU otherwise) give the dense LU's trajectories to round-off, a
+// sparse consistent mass gives its dense equivalent's, and the automatic
+// choice picks what it says.
+#include <nvib/nvib.hpp>
+
+#include <string>
+#include <vector>
+
+#include "check.hpp"
+
+using nvib::Index;
+using nvib::Matrix;
+using nvib::SparseMatrix;
+using nvib::Vector;
+namespace fx = nvib::effects;
+
+namespace {
+
+// A chain of n DOFs: a hardening spring and a damper to the ground on DOF 0, hardening springs
+// and dampers between neighbours, a ground acceleration on every DOF.
+std::vector<fx::Effect> chain(Index n) {
+  std::vector<fx::Effect> list;
+  list.push_back(fx::hardening_spring({{0, 1.0}}, 1e4, 50.0));
+  list.push_back(fx::damper({{0, 1.0}}, 2.0));
+  for (Index i = 1; i < n; ++i) {
+    list.push_back(fx::hardening_spring({{i, 1.0}, {i - 1, -1.0}}, 1e4 * (1.0 + 0.01 * double(i)), 50.0));
+    list.push_back(fx::damper({{i, 1.0}, {i - 1, -1.0}}, 2.0));
+  }
+  fx::Measure r;
+  for (Index i = 0; i < n; ++i) r.emplace_back(i, 1.0);
+  list.push_back(fx::ground_acceleration(r, fx::Signal::sine(5.0, 20.0)));
+  return list;
+}
+
+nvib::Newton with_solver(nvib::NewtonMode mode, nvib::LinearSolverChoice c) {
+  nvib::Newton nw;
+  nw.mode = mode;
+  nw.linear_solver = c;
+  return nw;
+}
+
+double rel_diff(const nvib::History& a, const nvib::History& b) {
+  return (a - b).cwiseAbs().maxCoeff() / std::max(b.cwiseAbs().maxCoeff(), 1e-300);
+}
+
+template <class Scheme, class ModelT>
+void same_with_both_solvers(const char* what, const ModelT& model, Scheme dense, Scheme sparse, const char* expected,
+                            double tol = 1e-12) {
+  const Index n = model.size();
+  const Vector u0 = Vector::Constant(n, 1e-3), v0 = Vector::LinSpaced(n, -0.1, 0.1);
+  const auto a = nvib::solve(model, dense, 1e-3, 0.2, u0, v0);
+  const auto b = nvib::solve(model, sparse, 1e-3, 0.2, u0, v0);
+  CHECK(a.status == nvib::Status::success && b.status == nvib::Status::success);
+  CHECK(std::string(a.stats.linear_solver) == "dense LU");
+  CHECK(std::string(b.stats.linear_solver) == expected);
+  const double du = rel_diff(b.u, a.u), dv = rel_diff(b.v, a.v), da = rel_diff(b.a, a.a);
+  std::printf("%-45s %-11s u %.1e v %.1e a %.1e, Newton it. %lld / %lld\n", what, expected, du, dv, da,
+              static_cast<long long>(a.stats.num_newton_iters), static_cast<long long>(b.stats.num_newton_iters));
+  CHECK(du <= tol && dv <= tol && da <= 100 * tol);
+}
+
+}  // namespace
+
+int main() {
+  using LS = nvib::LinearSolverChoice;
+  using Mode = nvib::NewtonMode;
+  const Index n = 120;
+  const auto model = fx::make_effect_model(nvib::Mass::diagonal(Vector::LinSpaced(n, 1.0, 2.0)), chain(n));
+  CHECK(model.has_sparse_tangent() && model.has_C() && !model.has_K());
+
+  for (Mode mode : {Mode::newton, Mode::modified, Mode::incremental, Mode::one_iteration}) {
+    const std::string m = nvib::to_string(mode);
+    same_with_both_solvers(("Newmark, chain, " + m).c_str(), model, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::dense)),
+                           nvib::Newmark(0.25, 0.5, with_solver(mode, LS::sparse)), "sparse LDLT");
+    same_with_both_solvers(("GeneralizedAlpha(rho 0.8), chain, " + m).c_str(), model,
+                           nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::dense)),
+                           nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::sparse)), "sparse LDLT");
+  }
+  // The automatic choice: sparse above 64 DOFs for this (banded) pattern, dense below.
+  {
+    const Vector u0 = Vector::Zero(n), v0 = Vector::Zero(n);
+    CHECK(std::string(nvib::solve(model, nvib::Newmark(), 1e-3, 0.01, u0, v0).stats.linear_solver) == "sparse LDLT");
+    const auto small = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(10)), chain(10));
+    CHECK(std::string(nvib::solve(small, nvib::Newmark(), 1e-3, 0.01, Vector::Zero(10), Vector::Zero(10))
+                          .stats.linear_solver) == "dense LU");
+  }
+  // A nonsymmetric linear stiffness (a follower-type coupling): sparse LU.
+  {
+    SparseMatrix K(n, n);
+    for (Index i = 0; i + 1 < n; ++i) K.insert(i, i + 1) = 300.0;
+    const auto follower = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(n)), chain(n), K);
+    same_with_both_solvers("Newmark, chain + nonsymmetric K", follower,
+                           nvib::Newmark(0.25, 0.5, with_solver(Mode::newton, LS::dense)),
+                           nvib::Newmark(0.25, 0.5, with_solver(Mode::newton, LS::sparse)), "sparse LU");
+  }
+  // A consistent (tridiagonal) mass, sparse and dense: explicit and implicit schemes agree to round-off.
+  {
+    SparseMatrix Ms(n, n);
+    for (Index i = 0; i < n; ++i) {
+      Ms.insert(i, i) = 4.0;
+      if (i + 1 < n) Ms.insert(i, i + 1) = Ms.insert(i + 1, i) = 1.0;
+    }
+    const auto ms = fx::make_effect_model(nvib::Mass::sparse(Ms), chain(n));
+    const auto md = fx::make_effect_model(nvib::Mass::dense(Matrix(Ms)), chain(n));
+    CHECK(ms.mass().kind() == nvib::Mass::Kind::sparse && md.mass().kind() == nvib::Mass::Kind::dense);
+    const Vector u0 = Vector::Constant(n, 1e-3), v0 = Vector::Zero(n);
+    const auto a = nvib::solve(ms, nvib::CentralDifference(), 1e-4, 0.05, u0, v0);
+    const auto b = nvib::solve(md, nvib::CentralDifference(), 1e-4, 0.05, u0, v0);
+    std::printf("consistent mass, sparse vs dense, CentralDifference: u %.1e\n", rel_diff(a.u, b.u));
+    CHECK(rel_diff(a.u, b.u) <= 1e-12 && rel_diff(a.v, b.v) <= 1e-12);
+    const auto c = nvib::solve(ms, nvib::Newmark(), 1e-3, 0.2, u0, v0);
+    const auto d = nvib::solve(md, nvib::Newmark(0.25, 0.5, with_solver(Mode::newton, LS::dense)), 1e-3, 0.2, u0, v0);
+    std::printf("consistent mass, sparse vs dense, Newmark (%s vs %s): u %.1e\n", c.stats.linear_solver,
+                d.stats.linear_solver, rel_diff(c.u, d.u));
+    CHECK(std::string(c.stats.linear_solver) == "sparse LDLT");
+    CHECK(rel_diff(c.u, d.u) <= 1e-12 && rel_diff(c.v, d.v) <= 1e-12);
+    // A mass with only diagonal entries given as sparse is lumped.
+    SparseMatrix Dg(3, 3);
+    Dg.insert(0, 0) = 1.0;
+    Dg.insert(1, 1) = 2.0;
+    Dg.insert(2, 2) = 3.0;
+    CHECK(nvib::Mass::sparse(Dg).is_diagonal());
+  }
+  // Bad masses are named.
+  {
+    SparseMatrix bad(2, 2);
+    bad.insert(0, 0) = 1.0;
+    bad.insert(0, 1) = 2.0;
+    bad.insert(1, 1) = 1.0;
+    bool named = false;
+    try {
+      nvib::Mass::sparse(bad);
+    } catch (const nvib::ArgumentError& e) {
+      named = e.argument() == "mass" && std::string(e.what()).find("not symmetric") != std::string::npos;
+    }
+    CHECK(named);
+    named = false;
+    try {
+      nvib::Mass::dense(Matrix::Identity(nvib::Mass::kDenseMax + 1, nvib::Mass::kDenseMax + 1));
+    } catch (const nvib::ArgumentError& e) {
+      named = e.argument() == "mass" && std::string(e.what()).find("sparse") != std::string::npos;
+    }
+    CHECK(named);
+  }
+  // Static equilibrium of the chain under a constant load on its last DOF: sparse and dense agree.
+  {
+    auto list = chain(n);
+    list.pop_back();  // no ground motion
+    list.push_back(fx::constant_force({{n - 1, 1.0}}, 500.0));
+    auto loaded = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(n)), list);
+    const Vector u = nvib::static_equilibrium(loaded, 0.0, Vector::Zero(n));
+    Vector f(n);
+    nvib::Stats st;
+    loaded.force(u, Vector::Zero(n), 0.0, f, st);
+    std::printf("static equilibrium of the loaded chain: max |residual| %.1e N, u_end %.6g\n",
+                f.cwiseAbs().maxCoeff(), u[n - 1]);
+    CHECK(f.cwiseAbs().maxCoeff() <= 1e-9 * 500.0);
+  }
+  return nvib_test::finish("test_sparse");
+}
