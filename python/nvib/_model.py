@@ -132,7 +132,8 @@ class Model:
         self.effects = None
         self.python_laws: list[str] = []  # where each Python law sits ("effects[3]")
         self.without = (without,) if isinstance(without, str) else tuple(without)
-        builtin, laws = [], []
+        builtin, laws, arrays = [], [], []
+        self.effect_arrays: list = []
         if effects is not None:
             effects = list(effects)
             known = {e.get("name") for e in effects if isinstance(e, dict)} | {
@@ -148,14 +149,18 @@ class Model:
                     continue
                 if isinstance(e, dict) and e.get("type") == "callable":
                     laws.append(self._python_law(i, e))
+                elif isinstance(e, dict) and "i" in e:
+                    arrays.append(self._effect_array(i, e))
                 else:
                     builtin.append(self._effect(i, e))
             self.effects = builtin
+            self.effect_arrays = arrays
             self.python_laws = [law[4] for law in laws]
         elif self.without:
             raise _checks.value_error("without", "only a model of declared effects can leave effects out")
         # With Python in the loop (force or callable laws) the GIL is kept during runs.
-        self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, bool(uses_velocity), bool(uses_time), laws)
+        self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, bool(uses_velocity), bool(uses_time), laws,
+                                 arrays)
 
     def _python_law(self, i: int, spec: dict):
         """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},
@@ -189,6 +194,65 @@ class Model:
         if not isinstance(name, str):
             raise _checks.type_error(f"{where}.name", "expected a string")
         return (index, coef, law, tangent, where, *flags)
+
+    def _effect_array(self, i: int, spec: dict) -> "_core.EffectArray":
+        """Many effects of one law: {"type": ..., "i": [...], "j": [...] (optional; -1: the ground), each
+        parameter one value or one per effect, "name": ...}; d_k = u[i_k] - u[j_k]."""
+        where = f"effects[{i}]"
+        kind = spec.get("type")
+        if kind not in EFFECT_PARAMETERS:
+            raise _checks.value_error(f"{where}.type", f"unknown effect type {kind!r} (known: {', '.join(EFFECT_PARAMETERS)})")
+        required, optional = EFFECT_PARAMETERS[kind]
+        for key in spec:
+            if key not in ("type", "i", "j", "name", "note") and key not in required and key not in optional:
+                raise _checks.value_error(f"{where}.{key}", f"unknown parameter of {kind} "
+                                                            f"(expected i, j, {', '.join(required + tuple(optional))})")
+        idx = self._dof_array(f"{where}.i", spec["i"], ground=False)
+        jdx = self._dof_array(f"{where}.j", spec["j"], ground=True) if spec.get("j") is not None else None
+        if jdx is not None and jdx.shape != idx.shape:
+            raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
+        signal_key = _core.laws()[kind]["signal"]
+        params, signal = {}, {}
+        for key in list(required) + list(optional):
+            if key not in spec:
+                continue
+            if key == signal_key:
+                signal = _signal(f"{where}.{key}", spec[key])
+                continue
+            value = spec[key]
+            arr = _checks.real_array(f"{where}.{key}", value)
+            if arr.ndim > 1 or (arr.ndim == 1 and arr.size not in (1, idx.size)):
+                raise _checks.value_error(f"{where}.{key}", f"expected one value or {idx.size} (one per effect), "
+                                                            f"got shape {arr.shape}")
+            params[key] = np.ascontiguousarray(arr.reshape(-1))
+        name = spec.get("name", "")
+        if not isinstance(name, str):
+            raise _checks.type_error(f"{where}.name", "expected a string")
+        try:
+            return _core.EffectArray(kind, idx, jdx if jdx is not None else np.empty(0, dtype=np.int32), params,
+                                     self.n, name=name, **signal)
+        except ArgumentError as exc:  # names the parameter or entry: make it effects[i].<it>
+            raise _checks.value_error(f"{where}.{exc.argument}", str(exc).split(": ", 1)[1]) from None
+
+    def _dof_array(self, where: str, values, *, ground: bool) -> np.ndarray:
+        """DOF indices (int32) from integers or DOF names; -1 (the ground) where ``ground``."""
+        if isinstance(values, (str, bytes)) or np.ndim(values) != 1:
+            raise _checks.type_error(where, "expected a 1-D list or array of DOF indices or names")
+        arr = np.asarray(values)
+        if arr.dtype.kind in "USO":  # names (and maybe -1 for the ground)
+            lookup = {d: k for k, d in enumerate(self.dofs)}
+            try:
+                arr = np.asarray([lookup[v] if isinstance(v, str) else v for v in arr.tolist()])
+            except KeyError as exc:
+                raise _checks.value_error(where, f"unknown DOF {exc.args[0]!r}") from None
+        if arr.size == 0 or arr.dtype.kind not in "iu":
+            raise _checks.type_error(where, "expected a non-empty list of DOF indices or names")
+        lo = -1 if ground else 0
+        bad = np.flatnonzero((arr < lo) | (arr >= self.n))
+        if bad.size:
+            raise _checks.value_error(f"{where}[{bad[0]}]", f"DOF index {arr[bad[0]]} is out of range for {self.n} "
+                                                            "degrees of freedom" + (" (-1: the ground)" if ground else ""))
+        return arr.astype(np.int32)
 
     def _dof_index(self, where: str, key) -> int:
         if isinstance(key, numbers.Integral) and not isinstance(key, bool):

@@ -115,12 +115,19 @@ using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, 
 inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, const nvib::SparseMatrix& K,
                           const nvib::SparseMatrix& C,
                           std::vector<std::string> dofs, py::object force, py::object tangent, bool uses_velocity,
-                          bool uses_time, std::vector<LawSpec> laws) {
+                          bool uses_time, std::vector<LawSpec> laws, std::vector<fx::EffectArray> arrays) {
   nvib::Mass ms = make_mass(mass);
   if (static_cast<Index>(dofs.size()) != ms.size())
     raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(dofs.size()));
+  for (const fx::EffectArray& a : arrays)
+    for (size_t k = 0; k < a.size(); ++k)
+      if (a.i[k] >= ms.size() || a.j[k] >= ms.size())
+        raise_value_error("arrays", "an effect array refers to DOF " + std::to_string(std::max(a.i[k], a.j[k])) +
+                                        " of a model of " + std::to_string(ms.size()));
+  py::gil_scoped_release nogil;  // assembly and compilation are C++ only
   if (force.is_none() && laws.empty())
-    return PyModel{fx::make_effect_model(std::move(ms), std::move(list), K, C), std::move(dofs)};
+    return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(arrays), K, C), std::move(dofs)};
+  py::gil_scoped_acquire gil;
   PyForce f;
   f.force = std::move(force);
   f.tangent_ = std::move(tangent);
@@ -134,7 +141,27 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
       if (i < 0 || i >= ms.size()) raise_value_error(where + ".measure", "DOF index " + std::to_string(i) + " is out of range");
     f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time});
   }
-  return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(f), K, C), std::move(dofs)};
+  return PyModel{fx::make_effect_model_plus(std::move(ms), std::move(list), std::move(arrays), std::move(f), K, C),
+                 std::move(dofs)};
+}
+
+// An effect array from Python: i, j as integer arrays, each parameter one value or an array.
+inline fx::EffectArray make_array(const std::string& type, const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>& i,
+                                  const py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>& j,
+                                  const py::dict& parameters, Index n, const std::string& name, const std::string& signal,
+                                  double amplitude, double omega, double phase, std::vector<double> t,
+                                  std::vector<double> values) {
+  std::vector<std::pair<std::string, std::vector<double>>> named;
+  for (auto item : parameters) {
+    const std::string key = item.first.cast<std::string>();
+    auto arr = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(item.second);
+    if (!arr) raise_type_error(key, "expected a real number or an array of them");
+    named.emplace_back(key, std::vector<double>(arr.data(), arr.data() + arr.size()));
+  }
+  std::vector<std::int32_t> vi(i.data(), i.data() + i.size()), vj(j.data(), j.data() + j.size());
+  fx::Signal sig = make_signal(signal, amplitude, omega, phase, std::move(t), std::move(values));
+  py::gil_scoped_release nogil;
+  return fx::make_effect_array(parse_law(type), std::move(vi), std::move(vj), named, n, std::move(sig), name);
 }
 
 // (K_t, C_t) as sparse matrices: the linear parts plus the force's entries.
@@ -194,11 +221,46 @@ inline void bind_models(py::module_& m) {
         return std::string("Effect(") + fx::to_string(e.law) + (e.name.empty() ? "" : ", name='" + e.name + "'") + ")";
       });
 
+  py::class_<fx::EffectArray>(m, "EffectArray",
+                              "Many effects of one law: d_k = u[i_k] - u[j_k] (j_k < 0: the ground), each "
+                              "parameter one value or one per effect.")
+      .def(py::init(&make_array), py::arg("type"), py::arg("i"), py::arg("j"), py::arg("parameters"), py::arg("n"),
+           py::kw_only(), py::arg("name") = "", py::arg("signal") = "none", py::arg("amplitude") = 0.0,
+           py::arg("omega") = 0.0, py::arg("phase") = 0.0, py::arg("t") = std::vector<double>{},
+           py::arg("values") = std::vector<double>{})
+      .def_property_readonly("type", [](const fx::EffectArray& a) { return fx::to_string(a.law); })
+      .def_readonly("name", &fx::EffectArray::name)
+      .def_property_readonly("size", &fx::EffectArray::size)
+      .def("__len__", &fx::EffectArray::size)
+      .def_property_readonly("i", [](const fx::EffectArray& a) { return py::array_t<std::int32_t>(a.i.size(), a.i.data()); })
+      .def_property_readonly("j", [](const fx::EffectArray& a) { return py::array_t<std::int32_t>(a.j.size(), a.j.data()); })
+      .def_property_readonly("parameters", [](const fx::EffectArray& a) {
+        py::dict d;
+        fx::dispatch(a.law, [&](auto L) {
+          using Lw = decltype(L);
+          for (size_t k = 0; k < Lw::parameters.size(); ++k) {
+            const auto& v = a.values[k];
+            d[Lw::parameters[k].name] = v.size() == 1 ? py::object(py::float_(v[0]))
+                                                      : py::object(py::array_t<double>(v.size(), v.data()));
+          }
+        });
+        return d;
+      }, "the declared parameters by name: one value, or an array of one per effect")
+      .def_property_readonly("uses_velocity", &fx::EffectArray::uses_velocity)
+      .def_property_readonly("uses_time", &fx::EffectArray::uses_time)
+      .def_property_readonly("is_linear", &fx::EffectArray::is_linear)
+      .def_property_readonly("is_load", &fx::EffectArray::is_load)
+      .def("__repr__", [](const fx::EffectArray& a) {
+        return std::string("EffectArray(") + fx::to_string(a.law) + ", " + std::to_string(a.size()) + " effects" +
+               (a.name.empty() ? "" : ", name='" + a.name + "'") + ")";
+      });
+
   py::class_<PyModel>(m, "Model", "M a + K u + C v + F(u, v, t) = 0: a mass and the declared effects (C++ only), "
                                   "optionally with Python callables (then the GIL is kept during runs).")
       .def(py::init(&make_model), py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"), py::arg("dofs"),
            py::arg("force") = py::none(), py::arg("tangent") = py::none(), py::arg("uses_velocity") = true,
-           py::arg("uses_time") = true, py::arg("laws") = std::vector<LawSpec>{})
+           py::arg("uses_time") = true, py::arg("laws") = std::vector<LawSpec>{},
+           py::arg("arrays") = std::vector<fx::EffectArray>{})
       .def_readonly("dofs", &PyModel::dofs)
       .def_property_readonly("has_python", &PyModel::python, "the model calls Python (the GIL is kept)")
       .def_property_readonly("size", [](const PyModel& p) { return p.visit([](auto& md) { return md.size(); }); })
@@ -207,8 +269,9 @@ inline void bind_models(py::module_& m) {
       .def_property_readonly("is_linear", [](const PyModel& p) { return p.visit([](auto& md) { return md.is_linear(); }); })
       .def_property_readonly("accounts_energy",
                              [](const PyModel& p) { return p.visit([](auto& md) { return md.accounts_energy(); }); })
-      .def_property_readonly("num_evaluated_effects", [](const PyModel& p) { return p.effects().evaluated().size(); })
+      .def_property_readonly("num_evaluated_effects", [](const PyModel& p) { return p.effects().num_evaluated(); })
       .def_property_readonly("effects", [](const PyModel& p) { return p.effects().effects(); })
+      .def_property_readonly("effect_arrays", [](const PyModel& p) { return p.effects().arrays(); })
       .def_property_readonly("mass_kind", [](const PyModel& p) {
         return p.visit([](auto& md) {
           const auto k = md.mass().kind();

@@ -116,7 +116,8 @@ struct Assembled {
 };
 
 template <class MatK, class MatC>
-Assembled assemble(const Mass& mass, std::vector<Effect> list, const MatK& K_extra, const MatC& C_extra) {
+Assembled assemble(const Mass& mass, std::vector<Effect> list, const MatK& K_extra, const MatC& C_extra,
+                   std::vector<EffectArray> arrays = {}) {
   const Index n = mass.size();
   LinearParts lin;
   auto add = [&](const auto& A, const char* name, std::vector<Eigen::Triplet<double, int>>& out) {
@@ -130,7 +131,7 @@ Assembled assemble(const Mass& mass, std::vector<Effect> list, const MatK& K_ext
   };
   add(K_extra, "K", lin.k);
   add(C_extra, "C", lin.c);
-  EffectSet set(std::move(list), mass, &lin);
+  EffectSet set(std::move(list), mass, &lin, std::move(arrays));
   return {LinearParts::to_matrix(lin.k, n), LinearParts::to_matrix(lin.c, n), std::move(set)};
 }
 }  // namespace detail_
@@ -144,7 +145,8 @@ Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, const Ma
 }
 
 template <class Extra, class MatK = Matrix, class MatC = Matrix,
-          class = std::enable_if_t<!std::is_base_of_v<Eigen::EigenBase<Extra>, Extra>>>
+          class = std::enable_if_t<!std::is_base_of_v<Eigen::EigenBase<Extra>, Extra> &&
+                                   !std::is_same_v<Extra, std::vector<EffectArray>>>>
 Model<EffectsPlus<Extra>> make_effect_model(Mass mass, std::vector<Effect> list, Extra extra,
                                             const MatK& K_extra = MatK(), const MatC& C_extra = MatC()) {
   const Index n = mass.size();
@@ -153,5 +155,25 @@ Model<EffectsPlus<Extra>> make_effect_model(Mass mass, std::vector<Effect> list,
                                    EffectsPlus<Extra>(std::move(a.set), std::move(extra), n));
 }
 
+}  // namespace effects
+}  // namespace nvib
+
+namespace nvib {
+namespace effects {
+// A model of effects declared one by one and as arrays (and an optional extra force functor).
+template <class MatK = Matrix, class MatC = Matrix>
+Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, std::vector<EffectArray> arrays,
+                                   const MatK& K_extra = MatK(), const MatC& C_extra = MatC()) {
+  auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra, std::move(arrays));
+  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set));
+}
+template <class Extra, class MatK = Matrix, class MatC = Matrix>
+Model<EffectsPlus<Extra>> make_effect_model_plus(Mass mass, std::vector<Effect> list, std::vector<EffectArray> arrays,
+                                                 Extra extra, const MatK& K_extra = MatK(), const MatC& C_extra = MatC()) {
+  const Index n = mass.size();
+  auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra, std::move(arrays));
+  return Model<EffectsPlus<Extra>>(std::move(mass), std::move(a.K), std::move(a.C),
+                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n));
+}
 }  // namespace effects
 }  // namespace nvib

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "../core/mass.hpp"
 #include "compiled_terms.hpp"
 #include "effect.hpp"
+#include "effect_array.hpp"
 
 namespace nvib {
 namespace effects {
@@ -43,10 +45,14 @@ struct LinearParts {
 class EffectSet {
  public:
   EffectSet() = default;
-  // `mass` turns ground accelerations' influence vectors r into M r.
-  EffectSet(std::vector<Effect> list, const Mass& mass, LinearParts* linear = nullptr) : all_(std::move(list)) {
+  // `mass` turns ground accelerations' influence vectors r into M r. Effects come one by one (list)
+  // and as arrays of one law (arrays).
+  EffectSet(std::vector<Effect> list, const Mass& mass, LinearParts* linear = nullptr,
+            std::vector<EffectArray> arrays = {})
+      : all_(std::move(list)), arrays_(std::move(arrays)) {
     const Index n = mass.size();
     a_.f_const.setZero(n);
+    for (size_t q = 0; q < arrays_.size(); ++q) take_array(q, linear);
     for (size_t i = 0; i < all_.size(); ++i) {
       Effect& e = all_[i];
       for (Index d : e.index)
@@ -76,6 +82,8 @@ class EffectSet {
     if (this == &o) return *this;
     all_ = o.all_;
     active_ = o.active_;
+    arrays_ = o.arrays_;
+    active_arrays_ = o.active_arrays_;
     a_.f_const = o.a_.f_const;
     uses_time_ = o.uses_time_;
     linear_ = o.linear_;
@@ -88,7 +96,14 @@ class EffectSet {
   EffectSet& operator=(EffectSet&&) noexcept = default;
 
   const std::vector<Effect>& effects() const { return all_; }
+  const std::vector<EffectArray>& arrays() const { return arrays_; }
   const std::vector<Effect>& evaluated() const { return active_; }
+  // Effects evaluated each step, single ones and those of arrays.
+  size_t num_evaluated() const {
+    size_t k = active_.size();
+    for (size_t q : active_arrays_) k += arrays_[q].size();
+    return k;
+  }
   const Vector& constant_load() const { return a_.f_const; }  // -P of the constant loads
 
   void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
@@ -184,6 +199,40 @@ class EffectSet {
     return e;
   }
 
+  // An array: linear springs and dampers into K and C, constant loads into the constant vector,
+  // the rest evaluated each step (compiled with the single effects).
+  void take_array(size_t q, LinearParts* linear) {
+    const EffectArray& e = arrays_[q];
+    if (e.size() == 0) return;
+    uses_time_ = uses_time_ || e.uses_time();
+    linear_ = linear_ && e.is_linear();
+    const bool spring = e.law == Law::spring, damper = e.law == Law::damper;
+    if (linear && (spring || damper)) {
+      auto& out = spring ? linear->k : linear->c;
+      out.reserve(out.size() + 4 * e.size());
+      for (size_t k = 0; k < e.size(); ++k) {
+        const double c = e.value(0, k);
+        const int i = e.i[k], j = e.j[k];
+        out.emplace_back(i, i, c);
+        if (j >= 0) {
+          out.emplace_back(j, j, c);
+          out.emplace_back(i, j, -c);
+          out.emplace_back(j, i, -c);
+        }
+      }
+      return;
+    }
+    if (e.law == Law::constant_force) {
+      for (size_t k = 0; k < e.size(); ++k) {
+        a_.f_const[e.i[k]] -= e.value(0, k);
+        if (e.j[k] >= 0) a_.f_const[e.j[k]] += e.value(0, k);
+      }
+      return;
+    }
+    active_arrays_.push_back(q);
+    active_velocity_ = active_velocity_ || e.uses_velocity();
+  }
+
   // A ground acceleration acts as g^T a_g(t) with g = M r.
   static void to_mass_weighted(Effect& e, const Mass& mass) {
     const Index n = mass.size();
@@ -205,13 +254,19 @@ class EffectSet {
                              e.p0 * e.coef[i] * e.coef[j]);
   }
 
-  // Flat, grouped form of active_ (rebuilt on copy: terms point at active_'s signals).
+  // Flat, grouped form of active_ and of the active arrays (rebuilt on copy: terms point at their signals).
   void compile() {
     using namespace compiled;
     a_.n = a_.f_const.size();
     const Index n = a_.n;
-    auto storage = [&](size_t i) {
-      const Effect& e = active_[i];
+    // One source per evaluated effect: a single effect (array = -1) or element k of an array.
+    struct Source {
+      std::int32_t array;
+      std::uint32_t k;
+      Law law;
+      Storage storage;
+    };
+    auto single_storage = [&](const Effect& e) {
       const Index m = static_cast<Index>(e.index.size());
       if (m == 1 && e.coef[0] == 1.0) return unit;
       if (m == 2 && e.coef[0] == 1.0 && e.coef[1] == -1.0 && e.index[0] != e.index[1]) return difference;
@@ -219,23 +274,52 @@ class EffectSet {
       if (2 * m < n) return sparse;
       return e.is_load() ? dense_first : dense;  // a load's force needs no measure
     };
-    std::vector<size_t> order(active_.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::vector<Source> sources;
+    size_t total = active_.size();
+    for (size_t q : active_arrays_) total += arrays_[q].size();
+    sources.reserve(total);
+    for (size_t i = 0; i < active_.size(); ++i)
+      sources.push_back({-1, static_cast<std::uint32_t>(i), active_[i].law, single_storage(active_[i])});
+    for (size_t q : active_arrays_) {
+      const EffectArray& e = arrays_[q];
+      for (size_t k = 0; k < e.size(); ++k)
+        sources.push_back({static_cast<std::int32_t>(q), static_cast<std::uint32_t>(k), e.law,
+                           e.j[k] < 0 ? unit : difference});
+    }
     // Dense loads first, then by law and storage: each group is one instantiated loop.
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-      const bool fa = storage(a) == dense_first, fb = storage(b) == dense_first;
+    std::stable_sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) {
+      const bool fa = a.storage == dense_first, fb = b.storage == dense_first;
       if (fa != fb) return fa;
-      return active_[a].law != active_[b].law ? active_[a].law < active_[b].law : storage(a) < storage(b);
+      return a.law != b.law ? a.law < b.law : a.storage < b.storage;
     });
     a_.idx.clear();
     a_.coef.clear();
     a_.rows.clear();
+    a_.idx.reserve(2 * total);
+    a_.coef.reserve(2 * total);
     terms_.clear();
-    terms_.reserve(active_.size());
-    for (size_t i : order) {
-      const Effect& e = active_[i];
+    terms_.reserve(total);
+    for (const Source& src : sources) {
       Term c;
       c.first = static_cast<std::int32_t>(a_.idx.size());
+      if (src.array >= 0) {
+        const EffectArray& e = arrays_[static_cast<size_t>(src.array)];
+        c.i0 = c.i1 = e.i[src.k];
+        c.c0 = 1.0;
+        a_.idx.push_back(c.i0);
+        a_.coef.push_back(1.0);
+        if (e.j[src.k] >= 0) {
+          c.i1 = e.j[src.k];
+          c.c1 = -1.0;
+          a_.idx.push_back(c.i1);
+          a_.coef.push_back(-1.0);
+        }
+        c.last = static_cast<std::int32_t>(a_.idx.size());
+        c.p = e.params(src.k);
+        terms_.push_back(c);
+        continue;
+      }
+      const Effect& e = active_[src.k];
       a_.idx.insert(a_.idx.end(), e.index.begin(), e.index.end());
       a_.coef.insert(a_.coef.end(), e.coef.begin(), e.coef.end());
       c.last = static_cast<std::int32_t>(a_.idx.size());
@@ -247,8 +331,7 @@ class EffectSet {
         c.i1 = e.index[1];
         c.c1 = e.coef[1];
       }
-      const Storage st = storage(i);
-      if (st == dense || st == dense_first) {
+      if (src.storage == dense || src.storage == dense_first) {
         c.offset = static_cast<Index>(a_.rows.size());
         a_.rows.resize(a_.rows.size() + static_cast<size_t>(n), 0.0);
         for (size_t k = 0; k < e.index.size(); ++k)
@@ -259,8 +342,8 @@ class EffectSet {
     }
     groups_.clear();
     for (size_t i = 0; i < terms_.size(); ++i) {
-      const Law law = active_[order[i]].law;
-      const Storage st = storage(order[i]);
+      const Law law = sources[i].law;
+      const Storage st = sources[i].storage;
       if (groups_.empty() || groups_.back().law != law || groups_.back().storage != st)
         groups_.push_back({law, st, kernel_for(law, st), &terms_[i], &terms_[i], false});
       groups_.back().end = &terms_[i] + 1;
@@ -269,6 +352,8 @@ class EffectSet {
   }
 
   std::vector<Effect> all_, active_;
+  std::vector<EffectArray> arrays_;
+  std::vector<size_t> active_arrays_;  // the arrays evaluated each step
   compiled::Arrays a_;
   bool uses_time_ = false, linear_ = true, active_velocity_ = false;
   double opaque_zero_ = 0.0;  // see operator()

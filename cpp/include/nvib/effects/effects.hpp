@@ -3,6 +3,7 @@
 
 #include "assembly.hpp"
 #include "effect.hpp"
+#include "effect_array.hpp"
 #include "effect_set.hpp"
 #include "laws.hpp"
 #include "signal.hpp"
