@@ -28,6 +28,7 @@ from ._scenes import SceneError, load_scene, scene_names
 from ._schemes import Newton, schemes
 from ._solve import Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
 from .analysis import exact, stability
+from . import scenes
 from .analysis.cost import cheapest, cost, cost_scipy, markdown_table, plot_work_precision, time_at_error
 from .analysis.reference import Reference, reference
 
@@ -40,7 +41,8 @@ __all__ = sorted([
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
-    "plot_work_precision", "reference", "save_result", "scene_names", "scheme_label", "schemes", "solve", "stability",
+    "plot_work_precision", "reference", "save_result", "scene_names", "scenes", "scheme_label", "schemes", "solve",
+    "stability",
     "time_at_error",
 ] + [cls.__name__ for cls in _schemes.scheme_classes()])
 

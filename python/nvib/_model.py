@@ -116,6 +116,7 @@ class Model:
         if len(set(dofs)) != n:
             raise _checks.value_error("dofs", "names must be unique")
         self.dofs = dofs
+        self._lookup: dict | None = None
         Km = _checks.linear_part("K", K, n)
         Cm = _checks.linear_part("C", C, n)
         self.u0 = _checks.vector("u0", np.zeros(n) if u0 is None else u0, n)
@@ -240,11 +241,7 @@ class Model:
             raise _checks.type_error(where, "expected a 1-D list or array of DOF indices or names")
         arr = np.asarray(values)
         if arr.dtype.kind in "USO":  # names (and maybe -1 for the ground)
-            lookup = {d: k for k, d in enumerate(self.dofs)}
-            try:
-                arr = np.asarray([lookup[v] if isinstance(v, str) else v for v in arr.tolist()])
-            except KeyError as exc:
-                raise _checks.value_error(where, f"unknown DOF {exc.args[0]!r}") from None
+            arr = np.asarray([self._dof_index(where, v) if isinstance(v, str) else v for v in arr.tolist()])
         if arr.size == 0 or arr.dtype.kind not in "iu":
             raise _checks.type_error(where, "expected a non-empty list of DOF indices or names")
         lo = -1 if ground else 0
@@ -259,9 +256,12 @@ class Model:
             if not 0 <= int(key) < self.n:
                 raise _checks.value_error(where, f"DOF index {key} is out of range for {self.n} degrees of freedom")
             return int(key)
-        if key in self.dofs:
-            return self.dofs.index(key)
-        raise _checks.value_error(where, f"unknown DOF {key!r} (known: {', '.join(self.dofs)})")
+        if self._lookup is None:  # built once: a list's index() is O(n) per call
+            self._lookup = {d: k for k, d in enumerate(self.dofs)}
+        if isinstance(key, str) and key in self._lookup:
+            return self._lookup[key]
+        known = ", ".join(self.dofs[:20]) + (f", ... ({self.n} in all)" if self.n > 20 else "")
+        raise _checks.value_error(where, f"unknown DOF {key!r} (known: {known})")
 
     def _effect(self, i: int, spec) -> "_core.Effect":
         where = f"effects[{i}]"
@@ -275,12 +275,12 @@ class Model:
             measure = spec["measure"]
             if not isinstance(measure, dict) or not measure:
                 raise _checks.value_error(f"{where}.measure", "expected a non-empty mapping DOF -> coefficient")
-        elif kind == "ground_acceleration":
-            measure = {d: 1.0 for d in self.dofs}  # every DOF moves with the ground
+            index = [self._dof_index(f"{where}.measure", k) for k in measure]
+            coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
+        elif kind == "ground_acceleration":  # every DOF moves with the ground
+            index, coef = np.arange(self.n), np.ones(self.n)
         else:
             raise _checks.value_error(f"{where}.measure", "missing")
-        index = [self._dof_index(f"{where}.measure", k) for k in measure]
-        coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
         required, optional = EFFECT_PARAMETERS[kind]
         for key in spec:
             if key not in _COMMON_KEYS and key not in required and key not in optional:
