@@ -19,6 +19,7 @@ import os
 
 from . import _core, _schemes
 from ._core import DEFAULT_MAX_ENERGY_ERROR
+from ._estimate import Estimate, estimate
 from ._io import save_result
 from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, DivergenceError, NvibError,
                       SingularMatrixError)
@@ -38,6 +39,7 @@ __version__ = "0.1.0"
 
 __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError",
+    "Estimate", "estimate",
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",

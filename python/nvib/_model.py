@@ -240,8 +240,9 @@ class Model:
         if isinstance(values, (str, bytes)) or np.ndim(values) != 1:
             raise _checks.type_error(where, "expected a 1-D list or array of DOF indices or names")
         arr = np.asarray(values)
-        if arr.dtype.kind in "USO":  # names (and maybe -1 for the ground)
-            arr = np.asarray([self._dof_index(where, v) if isinstance(v, str) else v for v in arr.tolist()])
+        if arr.dtype.kind in "USO":  # names (and maybe -1 for the ground): map the given items, not their strings
+            items = values.tolist() if isinstance(values, np.ndarray) else list(values)
+            arr = np.asarray([self._dof_index(where, v) if isinstance(v, str) else v for v in items])
         if arr.size == 0 or arr.dtype.kind not in "iu":
             raise _checks.type_error(where, "expected a non-empty list of DOF indices or names")
         lo = -1 if ground else 0

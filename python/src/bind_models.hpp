@@ -124,10 +124,10 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
       if (a.i[k] >= ms.size() || a.j[k] >= ms.size())
         raise_value_error("arrays", "an effect array refers to DOF " + std::to_string(std::max(a.i[k], a.j[k])) +
                                         " of a model of " + std::to_string(ms.size()));
-  py::gil_scoped_release nogil;  // assembly and compilation are C++ only
-  if (force.is_none() && laws.empty())
-    return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(arrays), K, C), std::move(dofs)};
-  py::gil_scoped_acquire gil;
+  if (force.is_none() && laws.empty())  // assembly and compilation, C++ only: no GIL, Ctrl-C polled
+    return interruptible(false, [&] {
+      return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(arrays), K, C), std::move(dofs)};
+    });
   PyForce f;
   f.force = std::move(force);
   f.tangent_ = std::move(tangent);

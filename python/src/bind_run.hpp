@@ -21,40 +21,22 @@ using nvib::Failure;
 using nvib::SolveOptions;
 using nvib::Status;
 
-// Called every few thousand steps: lets Ctrl-C through and reports progress.
-// Taking the GIL back costs up to the interpreter's switch interval when
-// another Python thread is busy, so after the first call it is done at most every 0.1 s.
+// Called about every 50 ms of work (the loop's clock): reports progress. Ctrl-C is checked by the
+// interrupt hook (interruptible(), bind_types.hpp) at the same polls.
 struct PyObserver {
   py::object callback;
   bool gil_released;
-  bool first = true;
-  std::chrono::steady_clock::time_point last{};
 
   void operator()(std::int64_t i, std::int64_t n) {
-    const auto now = std::chrono::steady_clock::now();
-    if (!first && now - last < std::chrono::milliseconds(100)) return;
-    first = false;
-    last = now;
-    auto body = [&]() {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      if (!callback.is_none()) callback(i, n);
-    };
+    if (callback.is_none()) return;
     if (gil_released) {
       py::gil_scoped_acquire gil;
-      body();
+      callback(i, n);
     } else {
-      body();
+      callback(i, n);
     }
   }
 };
-
-// Runs f with the GIL released when the model calls no Python.
-template <class F>
-auto maybe_without_gil(bool python, F&& f) {
-  if (python) return f();
-  py::gil_scoped_release nogil;
-  return f();
-}
 
 struct AnyStepper {
   virtual ~AnyStepper() = default;
@@ -97,7 +79,7 @@ struct StepperImpl final : AnyStepper {
   static constexpr bool python = std::is_same_v<std::decay_t<decltype(std::declval<S&>().model())>, HybridModel>;
 
   void initialize(double t0, const Vector& u0, const Vector& v0) override {
-    maybe_without_gil(python, [&] { return (s.initialize(t0, u0, v0), 0); });
+    interruptible(python, [&] { return (s.initialize(t0, u0, v0), 0); });
   }
   Status step(Failure& failure) override { return nvib::checked_step(s, failure); }
   double time() const override { return s.time(); }
@@ -120,7 +102,7 @@ struct StepperImpl final : AnyStepper {
   void set_state(double t, const Vector& x) override { s.set_state(t, x); }
   nvib::Result integrate(double t_end, const SolveOptions& opt, py::object observer) override {
     PyObserver obs{std::move(observer), !python};
-    return maybe_without_gil(python, [&] { return nvib::integrate(s, t_end, opt, obs); });
+    return interruptible(python, [&] { return nvib::integrate(s, t_end, opt, obs); });
   }
 
   template <class T, class = void>
@@ -160,6 +142,12 @@ inline SolveOptions solve_options(std::int64_t save_every, std::vector<Index> do
 inline void bind_run(py::module_& m) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   m.attr("DEFAULT_MAX_ENERGY_ERROR") = nvib::kDefaultMaxEnergyError;
+  m.def("available_memory", &nvib::available_memory_bytes, "bytes of memory available now (0 if unknown)");
+  m.def("history_bytes", &nvib::history_bytes, py::arg("states"), py::arg("dofs"), py::arg("energy"),
+        "bytes of a saved history of that many states and DOFs");
+  m.attr("PIM_MAX_DOFS") = nvib::kPimMaxDofs;
+  m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
+        "the number of steps of a run (t_end - t0)/dt, rounded up unless an integer to round-off");
   m.def(
       "solve",
       [](PyModel& model, py::object scheme, double dt, double t_end, double t0, const Vector& u0, const Vector& v0,
@@ -171,7 +159,7 @@ inline void bind_run(py::module_& m) {
         with_scheme(scheme, "scheme", [&](const auto& sc) {
           model.visit([&](auto& md) {
             PyObserver obs{progress, !model.python()};
-            result->r = maybe_without_gil(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
+            result->r = interruptible(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
           });
           return py::none();
         });

@@ -32,6 +32,33 @@ inline void set_argument_error(const char* type_name, const std::string& argumen
   throw py::error_already_set();
 }
 
+// Ctrl-C during C++ work: nvib::poll_interrupt() checks Python's signals (taking the GIL if the work
+// released it) and raises KeyboardInterrupt there. Installed for the C++ work of each call.
+struct PythonInterrupt {
+  bool gil_released;
+  static void poll(void* self) {
+    auto check = [] {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    };
+    if (static_cast<PythonInterrupt*>(self)->gil_released) {
+      py::gil_scoped_acquire gil;
+      check();
+    } else {
+      check();
+    }
+  }
+};
+
+// Runs f with Ctrl-C checked at the C++ polls, and with the GIL released when no Python is called.
+template <class F>
+auto interruptible(bool calls_python, F&& f) {
+  PythonInterrupt hook{!calls_python};
+  nvib::ScopedInterruptHook scope(&PythonInterrupt::poll, &hook);
+  if (calls_python) return f();
+  py::gil_scoped_release nogil;
+  return f();
+}
+
 inline py::dict stats_dict(const nvib::Stats& s) {
   py::dict d;
   d["num_steps"] = s.num_steps;

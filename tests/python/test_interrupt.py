@@ -1,7 +1,8 @@
 """Ctrl-C stops a long run of a C++-only model (no Python in the loop, the GIL
-released): the solve loop checks for signals every few thousand steps, at
-most every 0.1 s. A real SIGINT is sent to the process from another thread
-while the main thread is inside the C++ loop."""
+released): the C++ work polls for signals on a clock, about every 50 ms of
+work, at every factorisation and between the products of PIM's set-up. A
+real SIGINT is sent to the process from another thread while the main thread
+is inside the C++ loop."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import signal
 import threading
 import time
 
+import numpy as np
 import pytest
 
 import nvib
@@ -68,3 +70,34 @@ def test_sigint_stops_stepper_integrate_and_the_stepper_stays_usable(python_sigi
     assert t > 0.0
     res = st.integrate(t + 0.01)
     assert res.success and res.t[0] == t
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs POSIX signals")
+def test_sigint_stops_a_run_whose_steps_take_a_second_within_one_step(python_sigint_handler):
+    """Signals are polled on a clock (about every 50 ms of work, and at every factorisation), not every
+    few thousand steps: a 160,000-DOF lattice whose Newmark steps take about a second (two sparse
+    factorisations each) stops within one step of Ctrl-C."""
+    model = nvib.scenes.lattice(400, 400)
+    u0 = np.full(model.n, 1e-3)
+    st = nvib.Stepper(model, nvib.Newmark(), 1e-3, u0=u0)
+    t = time.perf_counter()
+    st.step()
+    step = time.perf_counter() - t
+    sent = interrupt_after(max(1.0, 1.5 * step))
+    with pytest.raises(KeyboardInterrupt):
+        nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=1.0, u0=u0, save_every=10**6)
+    stopped = time.perf_counter()
+    assert "at" in sent
+    assert stopped - sent["at"] < step + 0.5, f"stopped {stopped - sent['at']:.2f} s after the signal; a step {step:.2f} s"
+
+
+def test_sigint_stops_the_set_up_of_precise_integration(python_sigint_handler):
+    """PIM's dense set-up (O(n^3), tens of seconds at 600 DOFs) polls between its matrix products."""
+    model = nvib.scenes.chain(600)
+    sent = interrupt_after(DELAY)
+    t = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        nvib.solve(model, nvib.PreciseIntegration(), dt=1e-3, t_end=0.01)
+    stopped = time.perf_counter()
+    assert "at" in sent and stopped - t < 10.0
+    assert stopped - sent["at"] < 2.0, f"stopped {stopped - sent['at']:.2f} s after the signal"

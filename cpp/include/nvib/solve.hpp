@@ -1,6 +1,7 @@
 // The one loop shared by every scheme: step, save every k-th state, detect
-// divergence, sum the counters, call an observer (progress, interrupts). It
-// knows no scheme: a scheme names its stepper (Scheme::stepper<Model>).
+// divergence, sum the counters, call an observer (progress) and poll for an
+// interrupt about every 50 ms of work. It knows no scheme: a scheme names its
+// stepper (Scheme::stepper<Model>).
 #pragma once
 
 #include <chrono>
@@ -9,6 +10,8 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/interrupt.hpp"
+#include "core/memory.hpp"
 #include "core/stepper.hpp"
 
 namespace nvib {
@@ -22,7 +25,8 @@ struct SolveOptions {
   // infinity means no bound.
   double max_displacement = std::numeric_limits<double>::quiet_NaN();
   bool throw_on_failure = true;
-  std::int64_t observe_every = 4096;  // steps between observer calls
+  // Seconds of work between observer calls and interrupt polls (on a clock, not a count of steps).
+  double observe_period = 0.05;
   // Record kinetic and potential energy, work of the loads, dissipated energy
   // and the balance error at every saved state (powers integrated every step
   // by the trapezoidal rule).
@@ -34,7 +38,15 @@ struct SolveOptions {
   // Checked every step from the 10th on; infinity means no check; NaN (the
   // default) means kDefaultMaxEnergyError with energy, no check without.
   double max_energy_error = std::numeric_limits<double>::quiet_NaN();
+  // The saved history may take at most this many bytes; NaN (the default): half the memory
+  // available when the run starts; infinity: no limit. Checked before anything is allocated.
+  double max_history_bytes = std::numeric_limits<double>::quiet_NaN();
 };
+
+// Bytes of the history a run saves: nsave states of t and (u, v, a) on m DOFs, plus 5 energy columns.
+inline double history_bytes(std::int64_t nsave, Index m, bool energy) {
+  return 8.0 * static_cast<double>(nsave) * (1.0 + 3.0 * static_cast<double>(m) + (energy ? 5.0 : 0.0));
+}
 
 // Columns of Result::energy.
 enum EnergyColumn { kinetic = 0, potential = 1, work_in = 2, dissipated = 3, balance_error = 4 };
@@ -195,7 +207,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   const auto start = clock::now();
   const Index n = st.size();
   NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
-  NVIB_CHECK(opt.observe_every >= 1, "observe_every", "must be >= 1");
+  NVIB_CHECK(opt.observe_period > 0.0, "observe_period", "must be > 0");
   NVIB_CHECK(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0, "max_displacement",
                   "must be > 0 (infinity for no bound, NaN for the default)");
   for (Index d : opt.dofs)
@@ -204,8 +216,19 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   const std::int64_t nsteps = steps_to_reach(st.time(), t_end, st.dt());
   const std::int64_t k = opt.save_every;
   const std::int64_t nsave = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
-  NVIB_CHECK(nsave <= 2'000'000'000 / std::max<Index>(1, n), "save_every",
-                  "the run would save " + std::to_string(nsave) + " states; raise save_every");
+  {
+    const Index m = opt.dofs.empty() ? n : static_cast<Index>(opt.dofs.size());
+    const double bytes = history_bytes(nsave, m, opt.energy);
+    const double limit = std::isnan(opt.max_history_bytes) ? 0.5 * available_memory_bytes() : opt.max_history_bytes;
+    NVIB_CHECK(limit <= 0.0 || bytes <= limit, "save_every, dofs",
+               "the saved history would need " + detail::fmt(bytes / 1e9) + " GB (" + std::to_string(nsave) +
+                   " states of " + std::to_string(m) + " DOFs: t, u, v, a" + (opt.energy ? ", energy" : "") +
+                   "), more than the limit of " + detail::fmt(limit / 1e9) + " GB" +
+                   (std::isnan(opt.max_history_bytes) ? " (half the memory available)" : "") +
+                   "; save fewer states (a larger save_every) or fewer DOFs (dofs)");
+    NVIB_CHECK(static_cast<double>(nsave) * static_cast<double>(std::max<Index>(m, 1)) <= 9.0e15, "save_every",
+               "the run would save " + std::to_string(nsave) + " states; raise save_every");
+  }
 
   Result res;
   res.num_steps_requested = nsteps;
@@ -289,7 +312,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
                            : opt.max_displacement;
   double max_residual = std::numeric_limits<double>::quiet_NaN();
   // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
-  std::int64_t to_save = k, to_observe = opt.observe_every;
+  std::int64_t to_save = k, done = 0;
+  ClockPoll poll(opt.observe_period);
   for (std::int64_t i = 1; i <= nsteps; ++i) {
     Status s = st.step();
     const bool saving = --to_save == 0 || i == nsteps;
@@ -334,16 +358,18 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         }
       }
     }
+    done = i;
     if (saving) {
       save();
       to_save = k;
     }
     have_energy = false;
-    if (--to_observe == 0) {
+    if (poll.tick()) {
       observe(i, nsteps);
-      to_observe = opt.observe_every;
+      poll_interrupt();
     }
   }
+  observe(done, nsteps);  // once at the end too, however short the run
   if (row < nsave) {
     res.t.conservativeResize(row);
     res.u.conservativeResize(row, m);

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "../linalg/linear_solvers.hpp"
+#include "interrupt.hpp"
 #include "parameters.hpp"
 #include "types.hpp"
 
@@ -225,6 +226,7 @@ class NewtonSolver {
 
   template <class Problem, class ModelT>
   Status factorize(Problem& p, ModelT& model, const IterationMatrix& im, double t, std::int64_t step, Stats& st) {
+    poll_interrupt();  // a large model's factorisation can take a second
     const bool regular = ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference, opt_.linear_solver);
     ++st.num_factorizations;
     factorized_ = true;

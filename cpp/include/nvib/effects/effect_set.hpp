@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "../core/interrupt.hpp"
 #include "../core/mass.hpp"
 #include "compiled_terms.hpp"
 #include "effect.hpp"
@@ -300,6 +301,7 @@ class EffectSet {
     terms_.clear();
     terms_.reserve(total);
     for (const Source& src : sources) {
+      if ((terms_.size() & 0xFFFF) == 0) poll_interrupt();  // large models: every 65536 terms
       Term c;
       c.first = static_cast<std::int32_t>(a_.idx.size());
       if (src.array >= 0) {

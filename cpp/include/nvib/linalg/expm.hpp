@@ -7,6 +7,7 @@
 // log10(2^N) significant digits to round-off.
 #pragma once
 
+#include "../core/interrupt.hpp"
 #include "../core/types.hpp"
 
 namespace nvib {
@@ -26,6 +27,7 @@ inline Matrix expm_increment(const Matrix& A, int squarings = 20) {
   Ta.noalias() += 0.5 * (At2 * inner);
   Matrix tmp(n, n);
   for (int i = 0; i < squarings; ++i) {
+    poll_interrupt();  // O(n^3) each: large models take seconds
     tmp.noalias() = Ta * Ta;
     Ta = 2.0 * Ta + tmp;
   }
@@ -85,11 +87,13 @@ inline Matrix expm_increment_with_moments(const Matrix& A, double h, int q, std:
   Matrix tmp(n, n);
   double sigma = hs;  // h times the current scale
   for (int it = 0; it < squarings; ++it) {
+    poll_interrupt();
     // F_j <- 2 F_j + Ta F_j + sum_{i<j} F_i sigma^{j-i}/(j-i)!   (old values on the right)
     for (int j = 1; j <= q; ++j) {
       Matrix& g = G[static_cast<size_t>(j) - 1];
       const Matrix& Fj = F[static_cast<size_t>(j) - 1];
       g.noalias() = Ta * Fj;
+      poll_interrupt();  // after each O(n^3) product
       g += 2.0 * Fj;
       for (int i = 1; i < j; ++i) g += (std::pow(sigma, j - i) / fact(j - i)) * F[static_cast<size_t>(i) - 1];
     }

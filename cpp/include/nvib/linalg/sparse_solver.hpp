@@ -22,6 +22,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
 
+#include "../core/interrupt.hpp"
 #include "../core/types.hpp"
 #include "iteration_matrix.hpp"
 
@@ -76,6 +77,7 @@ class SparseLinearSolver {
       positions_of(model.C(), Ct_, posCtC_);
       positions_of(cent_, Ct_, posCtN_);
     }
+    poll_interrupt();
     symmetric_ = is_symmetric(model.K()) && (!velocity_ || is_symmetric(model.C()));
     lu_now_ = !symmetric_;
     if (symmetric_)

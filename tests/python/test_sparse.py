@@ -1,0 +1,270 @@
+"""Sparse models: the sparse and dense linear solvers and assemblies give the same trajectories,
+effect arrays equal effects one by one, generated scenes, and what large models must not do
+(allocate n^2, hide their memory, run PIM at any size)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from scipy import sparse
+
+import nvib
+
+from _registry import scheme_variants, with_newton
+
+IMPLICIT = scheme_variants(explicit=False)
+
+
+def rel(a, b) -> float:
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
+
+
+# ---------------------------------------------------------------- sparse and dense solvers agree
+@pytest.mark.parametrize("name", list(IMPLICIT))
+@pytest.mark.parametrize("scene", nvib.scene_names())
+def test_sparse_and_dense_solvers_agree_on_every_scene(scene, name):
+    model = nvib.load_scene(scene)
+    dt = model.scene["dt"]
+    runs = {}
+    for choice in ("dense", "sparse"):
+        scheme = with_newton(IMPLICIT[name], linear_solver=choice)
+        runs[choice] = nvib.solve(model, scheme, dt=dt, t_end=min(model.scene["t_end"], 300 * dt), throw=False)
+    d, s = runs["dense"], runs["sparse"]
+    assert d.status == s.status and len(d.t) == len(s.t)
+    assert d.stats.linear_solver in ("dense LU", "")  # "" where no factorisation was needed
+    assert s.stats.linear_solver in ("sparse LDLT", "sparse LU", "")
+    assert rel(s.u, d.u) <= 1e-12, (scene, name)
+    # v_{n+1} = v_n + (gamma / (beta dt)) (u_{n+1} - u_n - ...): the round-off of u, relative to max |u|,
+    # reaches v multiplied by gamma / (beta dt) (2 / dt at most here; measured: 2.6e-12 of max |v| on the vehicle)
+    v_scale = max(np.max(np.abs(d.v)), 4.0 * np.max(np.abs(d.u)) / dt)
+    assert np.max(np.abs(s.v - d.v)) <= 1e-12 * v_scale, (scene, name)
+
+
+def random_model(seed: int, n: int = 40):
+    """A random chain-with-shortcuts model of every stiffness law, dampers and loads."""
+    rng = np.random.default_rng(seed)
+    i = rng.integers(0, n, 3 * n)
+    j = rng.integers(-1, n, 3 * n)
+    keep = i != j
+    i, j = i[keep], j[keep]
+    third = len(i) // 3
+    effects = [
+        {"type": "hardening_spring", "i": i[:third], "j": j[:third], "k0": rng.uniform(50, 150, third), "a": 5.0},
+        {"type": "cubic_spring", "i": i[third:2 * third], "j": j[third:2 * third], "k3": 200.0},
+        {"type": "spring", "i": np.arange(n), "k": rng.uniform(10, 20, n)},
+        {"type": "damper", "i": i[2 * third:], "j": j[2 * third:], "c": rng.uniform(0.1, 0.3, len(i) - 2 * third)},
+        {"type": "power_damper", "i": np.arange(n), "c": 0.05, "p": 1.5},
+        {"type": "harmonic_force", "i": np.arange(0, n, 3), "amplitude": 2.0, "omega": 7.0},
+    ]
+    return nvib.Model(rng.uniform(1.0, 2.0, n), effects=effects, u0=rng.normal(0, 0.05, n), v0=rng.normal(0, 0.1, n))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_sparse_and_dense_solvers_agree_on_random_models(seed):
+    model = random_model(seed)
+    for name, scheme in IMPLICIT.items():
+        d = nvib.solve(model, with_newton(scheme, linear_solver="dense"), dt=2e-3, t_end=0.5)
+        s = nvib.solve(model, with_newton(scheme, linear_solver="sparse"), dt=2e-3, t_end=0.5)
+        assert s.stats.linear_solver == "sparse LDLT" and d.stats.linear_solver == "dense LU"
+        assert rel(s.u, d.u) <= 1e-12 and rel(s.v, d.v) <= 1e-12, (seed, name)
+
+
+def test_the_automatic_choice_is_stated():
+    small, big = nvib.scenes.chain(10), nvib.scenes.chain(200)
+    u0 = np.full(200, 1e-4)
+    assert nvib.solve(small, nvib.Newmark(), dt=1e-3, t_end=0.01, u0=u0[:10]).stats.linear_solver == "dense LU"
+    assert nvib.solve(big, nvib.Newmark(), dt=1e-3, t_end=0.01, u0=u0).stats.linear_solver == "sparse LDLT"
+    # a nonsymmetric linear stiffness: sparse LU
+    K = sparse.diags([np.full(199, 50.0)], [1], shape=(200, 200))
+    follower = nvib.Model(np.ones(200), K=K, effects=[{"type": "spring", "i": np.arange(200), "k": 1e4}], u0=u0)
+    assert nvib.solve(follower, nvib.Newmark(), dt=1e-3, t_end=0.01).stats.linear_solver == "sparse LU"
+    with pytest.raises(ValueError, match="^linear_solver: 'sparse' needs a model whose tangent"):
+        callable_model = nvib.Model([1.0], force=lambda u, v, t: u, u0=[1.0])
+        nvib.solve(callable_model, nvib.Newmark(newton=nvib.Newton(linear_solver="sparse")), dt=1e-3, t_end=0.01)
+
+
+# ---------------------------------------------------------------- sparse and dense assembly agree
+@pytest.mark.parametrize("name", list(scheme_variants()))
+def test_sparse_and_dense_matrices_and_masses_give_the_same_run(name):
+    scheme = scheme_variants()[name]
+    n = 30
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(n, n)) * (rng.uniform(size=(n, n)) < 0.1)
+    K = A @ A.T + 100.0 * np.eye(n)
+    C = 0.01 * K
+    M = np.diag(rng.uniform(1, 2, n)) + 0.1 * np.diag(np.ones(n - 1), 1) + 0.1 * np.diag(np.ones(n - 1), -1)
+    eff = [{"type": "cubic_spring", "i": np.arange(n), "k3": 1e3}]
+    u0 = rng.normal(0, 0.01, n)
+    dense = nvib.Model(M, K=K, C=C, effects=eff, u0=u0)
+    sp = nvib.Model(sparse.csc_matrix(M), K=sparse.csr_matrix(K), C=sparse.coo_matrix(C), effects=eff, u0=u0)
+    assert dense._core.mass_kind == "dense" and sp._core.mass_kind == "sparse"
+    a = nvib.solve(dense, scheme, dt=1e-3, t_end=0.2)
+    b = nvib.solve(sp, scheme, dt=1e-3, t_end=0.2)
+    assert rel(b.u, a.u) <= 1e-12 and rel(b.v, a.v) <= 1e-12
+    np.testing.assert_array_equal(sp.K.toarray(), K)
+    np.testing.assert_array_equal(sp.mass_sparse.toarray(), M)
+
+
+def test_sparse_mass_and_matrices_are_checked():
+    with pytest.raises(ValueError, match="^mass: the mass matrix is not symmetric"):
+        nvib.Model(sparse.csc_matrix(np.array([[1.0, 0.5], [0.0, 1.0]])))
+    with pytest.raises(ValueError, match="^mass: the sparse mass matrix is not positive definite"):
+        nvib.Model(sparse.csc_matrix(np.array([[1.0, 2.0], [2.0, 1.0]])))
+    with pytest.raises(ValueError, match=r"^K: expected shape \(2, 2\)"):
+        nvib.Model(np.ones(2), K=sparse.eye(3))
+    with pytest.raises(ValueError, match="^C: contains NaN or Inf"):
+        nvib.Model(np.ones(2), C=sparse.diags([np.array([1.0, np.nan])], [0]))
+    with pytest.raises(ValueError, match="^mass: a dense mass of 2001 DOFs would take .* give it as a sparse matrix"):
+        nvib.Model(np.eye(2001) + 1e-3 * np.eye(2001, k=1) + 1e-3 * np.eye(2001, k=-1))
+    assert nvib.Model(sparse.diags([np.array([1.0, 2.0])], [0]))._core.mass_kind == "diagonal"
+
+
+# ---------------------------------------------------------------- effect arrays
+def chain_effects(n, as_arrays: bool):
+    c = 0.1 * (1 + np.arange(1, n) / n)
+    if as_arrays:
+        return [{"type": "hardening_spring", "i": np.arange(n), "j": np.arange(n) - 1, "k0": 1e4, "a": 10.0},
+                {"type": "damper", "i": np.arange(1, n), "j": np.arange(n - 1), "c": c},
+                {"type": "constant_force", "i": [n - 1], "value": 3.0}]
+    eff = [{"type": "hardening_spring", "measure": {0: 1.0}, "k0": 1e4, "a": 10.0}]
+    eff += [{"type": "hardening_spring", "measure": {i: 1.0, i - 1: -1.0}, "k0": 1e4, "a": 10.0} for i in range(1, n)]
+    eff += [{"type": "damper", "measure": {i: 1.0, i - 1: -1.0}, "c": c[i - 1]} for i in range(1, n)]
+    return eff + [{"type": "constant_force", "measure": {n - 1: 1.0}, "value": 3.0}]
+
+
+@pytest.mark.parametrize("name", list(scheme_variants()))
+def test_arrays_equal_effects_one_by_one(name):
+    scheme = scheme_variants()[name]
+    n = 80
+    u0 = np.linspace(0.0, 0.01, n)
+    one = nvib.Model(np.ones(n), effects=chain_effects(n, False), u0=u0)
+    arr = nvib.Model(np.ones(n), effects=chain_effects(n, True), u0=u0)
+    assert [len(a) for a in arr.effect_arrays] == [n, n - 1, 1]
+    assert arr._core.num_evaluated_effects == one._core.num_evaluated_effects == n
+    a = nvib.solve(one, scheme, dt=1e-3, t_end=0.1, energy=True)
+    b = nvib.solve(arr, scheme, dt=1e-3, t_end=0.1, energy=True)
+    assert np.array_equal(a.u, b.u) and np.array_equal(a.v, b.v)  # the same operations in the same order
+    np.testing.assert_allclose(b.energy.total, a.energy.total, rtol=1e-13)
+
+
+def test_arrays_accept_names_the_ground_and_per_effect_parameters(tmp_path):
+    m = nvib.Model([1.0, 2.0, 3.0], dofs=["a", "b", "c"], effects=[
+        {"type": "spring", "i": ["a", "b", "c"], "j": [-1, "a", "b"], "k": [10.0, 20.0, 30.0]}])
+    np.testing.assert_array_equal(m.K.toarray(), [[30, -20, 0], [-20, 50, -30], [0, -30, 30]])
+    arr = m.effect_arrays[0]
+    assert arr.type == "spring" and list(arr.i) == [0, 1, 2] and list(arr.j) == [-1, 0, 1]
+    np.testing.assert_array_equal(arr.parameters["k"], [10.0, 20.0, 30.0])
+    # in a scene file
+    path = tmp_path / "s.toml"
+    path.write_text('[scene]\nname = "s"\n[dofs]\nnames = ["a", "b"]\nmass = [1.0, 1.0]\n'
+                    '[[effect]]\ntype = "hardening_spring"\ni = ["a", "b"]\nj = [-1, "a"]\nk0 = 100.0\na = [1.0, 2.0]\n')
+    s = nvib.load_scene(str(path))
+    assert len(s.effect_arrays) == 1 and s._core.num_evaluated_effects == 2
+
+
+@pytest.mark.parametrize("spec, match", [
+    ({"type": "spring", "i": [0, 1], "k": [1.0, 2.0, 3.0]}, r"^effects\[0\]\.k: expected one value or 2"),
+    ({"type": "spring", "i": [0, 5], "k": 1.0}, r"^effects\[0\]\.i\[1\]: DOF index 5 is out of range"),
+    ({"type": "spring", "i": [0, 1], "j": [0, -1], "k": 1.0}, r"^effects\[0\]\.j\[0\]: equals i\[0\]"),
+    ({"type": "spring", "i": [0, 1], "j": [-1], "k": 1.0}, r"^effects\[0\]\.j: expected 2 entries"),
+    ({"type": "power_damper", "i": [0, 1], "c": 1.0, "p": [1.0, -1.0]}, r"^effects\[0\]\.p\[1\]: the exponent"),
+    ({"type": "hardening_spring", "i": [0], "k0": 1.0}, r"^effects\[0\]\.a: missing parameter"),
+    ({"type": "spring", "i": [0], "k": np.nan}, r"^effects\[0\]\.k: spring needs a finite value"),
+    ({"type": "spring", "i": ["q"], "k": 1.0}, r"^effects\[0\]\.i: unknown DOF 'q'"),
+    ({"type": "spring", "i": [0], "kk": 1.0}, r"^effects\[0\]\.kk: unknown parameter of spring"),
+    ({"type": "ground_acceleration", "i": [0], "signal": {"kind": "sine", "amplitude": 1.0, "omega": 1.0}},
+     r"^effects\[0\]\.type: a ground acceleration acts on the whole model"),
+])
+def test_bad_arrays_name_the_entry(spec, match):
+    with pytest.raises(ValueError, match=match):
+        nvib.Model(np.ones(3), effects=[spec])
+
+
+# ---------------------------------------------------------------- generated scenes
+def test_chain_of_six_without_damping_is_the_building():
+    chain, building = nvib.scenes.chain(6, damping_ratio=0.0), nvib.load_scene("building")
+    for scheme in (nvib.CEMDTS(), nvib.Newmark()):
+        a = nvib.solve(chain, scheme, dt=1e-3, t_end=1.0)
+        b = nvib.solve(building, scheme, dt=1e-3, t_end=1.0)
+        assert np.array_equal(a.u, b.u)
+
+
+def test_lattice_pattern_and_its_fill_in():
+    lat = nvib.scenes.lattice(6, 5)
+    assert lat.n == 30 and lat.dofs[7] == "n1_1"
+    K = lat.K.toarray()
+    # node (1, 1) = DOF 7 is tied to (0, 1), (2, 1), (1, 0), (1, 2): DOFs 6, 8, 1, 13
+    assert sorted(np.flatnonzero(K[7])) == [1, 6, 7, 8, 13]
+    assert np.allclose(K, K.T)
+    res = nvib.solve(nvib.scenes.lattice(12, 12), nvib.Newmark(), dt=1e-3, t_end=0.02)
+    assert res.stats.linear_solver == "sparse LDLT" and res.success
+
+
+@pytest.mark.parametrize("call, argument", [
+    (lambda: nvib.scenes.chain(0), "n"), (lambda: nvib.scenes.chain(3, mass=-1.0), "mass"),
+    (lambda: nvib.scenes.lattice(2, 2.5), "ny"), (lambda: nvib.scenes.lattice(2, 2, k=0.0), "k"),
+])
+def test_scene_generators_name_bad_arguments(call, argument):
+    with pytest.raises((ValueError, TypeError)) as info:
+        call()
+    assert info.value.argument == argument
+
+
+# ---------------------------------------------------------------- what large models must not do
+def _run(code: str, limit_bytes: int | None = None, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    prelude = ""
+    if limit_bytes is not None:
+        prelude = (f"import resource\nresource.setrlimit(resource.RLIMIT_AS, ({limit_bytes}, {limit_bytes}))\n")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    return subprocess.run([sys.executable, "-c", prelude + textwrap.dedent(code)], capture_output=True, text=True,
+                          timeout=timeout, env=env)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_AS as a memory ceiling")
+def test_a_200000_dof_chain_builds_and_runs_under_1_gb():
+    # a dense K or C of this size would take 320 GB
+    proc = _run("""
+        import nvib
+        model = nvib.scenes.chain(200_000)
+        res = nvib.solve(model, nvib.CentralDifference(), dt=model.scene["dt"], t_end=100 * model.scene["dt"],
+                         save_every=50)
+        assert res.success and res.stats.num_steps == 100, res
+        print("ok", res.u.shape)
+    """, limit_bytes=1 << 30)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.startswith("ok (3, 200000)")
+
+
+def test_a_history_too_large_raises_before_it_is_allocated():
+    model = nvib.load_scene("building")
+    # 10^9 states of 6 DOFs: 152 GB
+    with pytest.raises(ValueError, match=r"^save_every, dofs: the saved history would need 152 GB") as info:
+        nvib.solve(model, nvib.CentralDifference(), dt=1e-9, t_end=1.0)
+    assert info.value.argument == "save_every, dofs"
+    est = nvib.estimate(model, nvib.CentralDifference(), dt=1e-9, t_end=1.0, probe_seconds=0.01)
+    assert not est.fits and est.history_bytes == pytest.approx(8 * (10**9 + 1) * 19)
+    ok = nvib.estimate(model, nvib.CentralDifference(), dt=1e-9, t_end=1.0, save_every=10**6, probe_seconds=0.01)
+    assert ok.fits and ok.saved_states == 1001 and ok.seconds_per_step > 0
+
+
+def test_estimate_predicts_the_run():
+    model = nvib.scenes.chain(2000)
+    est = nvib.estimate(model, nvib.Newmark(), dt=1e-3, t_end=0.5, save_every=10, probe_seconds=0.02)
+    res = nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=0.5, save_every=10)
+    assert est.steps == res.stats.num_steps == 500 and est.saved_states == len(res.t) == 51
+    assert est.history_bytes == res.t.nbytes + res.u.nbytes + res.v.nbytes + res.a.nbytes
+    assert est.linear_solver == res.stats.linear_solver == "sparse LDLT"
+    assert "steps" in str(est) and "linear solver: sparse LDLT" in str(est)
+
+
+def test_precise_integration_refuses_large_models_with_its_cost():
+    model = nvib.scenes.chain(nvib._core.PIM_MAX_DOFS + 1)
+    with pytest.raises(ValueError, match=r"^scheme: PreciseIntegration is dense: for 1001 DOFs its set-up would need "
+                                         r"about [0-9.]+ GB and [0-9.]+ minutes"):
+        nvib.Stepper(model, nvib.PreciseIntegration(), 1e-3)
