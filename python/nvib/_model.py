@@ -8,6 +8,7 @@ import numpy as np
 
 from . import _checks, _core
 from ._core import ArgumentError
+from ._names import GeneratedNames, NumberedNames
 
 def _effect_parameters() -> dict[str, tuple[tuple[str, ...], dict[str, object]]]:
     """(required, optional-with-default) parameters of each built-in effect type, from the C++ laws;
@@ -107,14 +108,15 @@ class Model:
             raise _checks.value_error("mass", "the model needs at least one degree of freedom")
         self.n = n
         if dofs is None:
-            dofs = [f"u{i}" for i in range(n)]
+            dofs = NumberedNames("u", n)  # u0, u1, ... made on demand
         if isinstance(dofs, (str, bytes)) or not hasattr(dofs, "__iter__"):
             raise _checks.type_error("dofs", f"expected a list of {n} names, got {type(dofs).__name__}")
-        dofs = [str(d) for d in dofs]
+        if not isinstance(dofs, GeneratedNames):  # generated names are unique strings by construction
+            dofs = [str(d) for d in dofs]
+            if len(set(dofs)) != len(dofs):
+                raise _checks.value_error("dofs", "names must be unique")
         if len(dofs) != n:
             raise _checks.value_error("dofs", f"expected {n} names, got {len(dofs)}")
-        if len(set(dofs)) != n:
-            raise _checks.value_error("dofs", "names must be unique")
         self.dofs = dofs
         self._lookup: dict | None = None
         Km = _checks.linear_part("K", K, n)
@@ -257,10 +259,15 @@ class Model:
             if not 0 <= int(key) < self.n:
                 raise _checks.value_error(where, f"DOF index {key} is out of range for {self.n} degrees of freedom")
             return int(key)
-        if self._lookup is None:  # built once: a list's index() is O(n) per call
-            self._lookup = {d: k for k, d in enumerate(self.dofs)}
-        if isinstance(key, str) and key in self._lookup:
-            return self._lookup[key]
+        if isinstance(self.dofs, GeneratedNames):
+            k = self.dofs.number(key) if isinstance(key, str) else None
+            if k is not None:
+                return k
+        else:
+            if self._lookup is None:  # built once: a list's index() is O(n) per call
+                self._lookup = {d: k for k, d in enumerate(self.dofs)}
+            if isinstance(key, str) and key in self._lookup:
+                return self._lookup[key]
         known = ", ".join(self.dofs[:20]) + (f", ... ({self.n} in all)" if self.n > 20 else "")
         raise _checks.value_error(where, f"unknown DOF {key!r} (known: {known})")
 

@@ -30,7 +30,7 @@ using MassArray = py::array_t<double, py::array::c_style | py::array::forcecast>
 // or with Python callables (the GIL is kept); its DOF names.
 struct PyModel {
   std::variant<EffectModel, HybridModel> m;
-  std::vector<std::string> dofs;
+  py::object dofs;  // the DOF names: a list, or names made on demand (nvib._names)
   bool python() const { return m.index() == 1; }
   template <class F>
   decltype(auto) visit(F&& f) {
@@ -114,11 +114,11 @@ using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, 
 
 inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, const nvib::SparseMatrix& K,
                           const nvib::SparseMatrix& C,
-                          std::vector<std::string> dofs, py::object force, py::object tangent, bool uses_velocity,
+                          py::object dofs, py::object force, py::object tangent, bool uses_velocity,
                           bool uses_time, std::vector<LawSpec> laws, std::vector<fx::EffectArray> arrays) {
   nvib::Mass ms = make_mass(mass);
-  if (static_cast<Index>(dofs.size()) != ms.size())
-    raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(dofs.size()));
+  if (static_cast<Index>(py::len(dofs)) != ms.size())
+    raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(py::len(dofs)));
   for (const fx::EffectArray& a : arrays)
     for (size_t k = 0; k < a.size(); ++k)
       if (a.i[k] >= ms.size() || a.j[k] >= ms.size())

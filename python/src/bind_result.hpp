@@ -20,7 +20,25 @@ struct PyResult {
   nvib::Result r;
   py::object scheme = py::none();
   double dt = 0.0;
-  std::vector<std::string> dof_names;  // of the saved DOFs
+  py::object names = py::none();      // the model's DOF names (a list, or names made on demand)
+  py::object dof_names = py::none();  // of the saved DOFs, made on first use
+
+  // The names of the saved DOFs: the model's own sequence when all are saved in order (names made on
+  // demand stay so), else a list.
+  py::object saved_names() {
+    if (!dof_names.is_none()) return dof_names;
+    const size_t m = r.dofs.size();
+    bool all = m == py::len(names);
+    for (size_t k = 0; all && k < m; ++k) all = r.dofs[k] == static_cast<Index>(k);
+    if (all && !py::isinstance<py::list>(names)) {
+      dof_names = names;
+    } else {
+      py::list out(m);
+      for (size_t k = 0; k < m; ++k) out[k] = names[py::int_(r.dofs[k])];
+      dof_names = out;
+    }
+    return dof_names;
+  }
 };
 
 // An (rows, cols) view of row-major storage with the given column stride, owned by `owner`.
@@ -100,7 +118,7 @@ inline void bind_result(py::module_& m) {
                                if (r.energy.size() == 0) return py::none();
                                return py::cast(PyEnergy{self, &r.energy});
                              })
-      .def_readonly("dofs", &PyResult::dof_names)
+      .def_property_readonly("dofs", &PyResult::saved_names, "the names of the saved DOFs")
       .def_property_readonly("dof_indices", [](const PyResult& p) { return p.r.dofs; })
       .def_property_readonly("stats", [](const PyResult& p) { return p.r.stats; })
       .def_property_readonly("status", [](const PyResult& p) { return p.r.status; })

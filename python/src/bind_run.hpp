@@ -57,7 +57,7 @@ struct AnyStepper {
   virtual void set_state(double t, const Vector& x) = 0;
 
   py::object scheme;
-  std::vector<std::string> dofs;
+  py::object dofs;  // the model's DOF names
   std::atomic<bool> busy{false};
 };
 
@@ -165,7 +165,7 @@ inline void bind_run(py::module_& m) {
         });
         result->scheme = scheme;
         result->dt = dt;
-        for (Index d : result->r.dofs) result->dof_names.push_back(model.dofs[static_cast<size_t>(d)]);
+        result->names = model.dofs;
         return result;
       },
       py::arg("model"), py::arg("scheme"), py::arg("dt"), py::arg("t_end"), py::arg("t0"), py::arg("u0"),
@@ -222,7 +222,7 @@ inline void bind_run(py::module_& m) {
                                     std::move(progress));
             result->scheme = s.scheme;
             result->dt = s.dt();
-            for (Index d : result->r.dofs) result->dof_names.push_back(s.dofs[static_cast<size_t>(d)]);
+            result->names = s.dofs;
             return result;
           },
           py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},

@@ -12,7 +12,8 @@ a ground acceleration. Its iteration matrix has bandwidth nx: a sparse
 factorisation fills in, unlike the chain's.
 
 Both are built from effect arrays (one entry per law), so 10^6 DOFs build in
-about a second; DOF names are x1..xn (chain) and n<ix>_<iy> (lattice).
+about a second; DOF names are x1..xn (chain) and n<ix>_<iy> (lattice), made on demand
+(nvib._names), not stored.
 SI units: kg, N/m, N s/m, m/s^2.
 """
 
@@ -24,6 +25,7 @@ import numpy as np
 
 from .. import _checks
 from .._model import Model
+from .._names import GridNames, NumberedNames
 
 __all__ = ["chain", "lattice"]
 
@@ -60,7 +62,7 @@ def chain(n: int, *, mass: float = 1e5, k0: float = 1e8, a: float = 10.0, dampin
     if c > 0.0:
         effects.insert(1, {"type": "damper", "name": "dampers", "i": idx, "j": idx - 1, "c": c})
     dt = 0.2 * math.sqrt(mass / k0) if dt is None else _checks.real("dt", dt, positive=True)
-    model = Model(np.full(n, float(mass)), effects=effects, dofs=_names("x", n), name=f"chain({n})")
+    model = Model(np.full(n, float(mass)), effects=effects, dofs=NumberedNames("x", n, start=1), name=f"chain({n})")
     model.scene = _scene(f"chain({n})", f"Shear chain of {n} storeys, a_g = {ag_amplitude:g} sin({ag_omega:g} t)",
                          dt, t_end, "x1")
     return model
@@ -99,15 +101,10 @@ def lattice(nx: int, ny: int, *, mass: float = 1.0, k: float = 1e4, k3: float = 
     n = nx * ny
     omega_max = math.sqrt((8.0 * k + max(k_ground, 0.0)) / mass)
     dt = 0.2 * 2.0 / omega_max if dt is None else _checks.real("dt", dt, positive=True)
-    model = Model(np.full(n, float(mass)), effects=effects, dofs=[f"n{a}_{b}" for b in range(ny) for a in range(nx)],
-                  name=f"lattice({nx}x{ny})")
+    model = Model(np.full(n, float(mass)), effects=effects, dofs=GridNames("n", nx, ny), name=f"lattice({nx}x{ny})")
     model.scene = _scene(f"lattice({nx}x{ny})", f"Mass-spring lattice {nx} x {ny}, cubic ties, "
                          f"a_g = {ag_amplitude:g} sin({ag_omega:g} t)", dt, t_end, model.dofs[n // 2])
     return model
-
-
-def _names(prefix: str, n: int) -> list[str]:
-    return [f"{prefix}{k}" for k in range(1, n + 1)]
 
 
 def _scene(name: str, title: str, dt: float, t_end: float, plot_dof: str) -> dict:

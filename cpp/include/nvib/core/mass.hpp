@@ -30,12 +30,12 @@ class Mass {
       NVIB_CHECK(std::isfinite(1.0 / m[i]), "mass", "entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
                                                      ", too small for its inverse to be finite");
     }
-    Mass out;
-    out.kind_ = Kind::diagonal;
-    out.d_ = m;
-    out.dinv_ = m.cwiseInverse();
-    out.ndinv_ = -out.dinv_;
-    return out;
+    auto data = std::make_shared<Data>();
+    data->kind = Kind::diagonal;
+    data->d = m;
+    data->dinv = m.cwiseInverse();
+    data->ndinv = -data->dinv;
+    return Mass(std::move(data));
   }
 
   // A sparse symmetric positive definite mass; one with only diagonal entries is lumped.
@@ -56,13 +56,13 @@ class Mass {
       return diagonal(d);
     }
     check_symmetric(SparseMatrix(M - SparseMatrix(M.transpose())), max_abs(M));
-    Mass out;
-    out.kind_ = Kind::sparse;
-    out.d_ = M.diagonal();
-    auto llt = std::make_shared<Eigen::SimplicialLLT<SparseMatrix>>(M);  // AMD ordering
-    NVIB_CHECK(llt->info() == Eigen::Success, "mass", "the sparse mass matrix is not positive definite");
-    out.sllt_ = std::move(llt);
-    out.S_ = std::move(M);
+    auto data = std::make_shared<Data>();
+    data->kind = Kind::sparse;
+    data->d = M.diagonal();
+    data->sllt = std::make_shared<Eigen::SimplicialLLT<SparseMatrix>>(M);  // AMD ordering
+    NVIB_CHECK(data->sllt->info() == Eigen::Success, "mass", "the sparse mass matrix is not positive definite");
+    data->S = std::move(M);
+    Mass out(std::move(data));
     out.work_.setZero(n);
     return out;
   }
@@ -77,42 +77,42 @@ class Mass {
                    " DOFs give it as a sparse matrix (scipy.sparse), or lumped (a 1-D array of masses)");
     NVIB_CHECK(M.allFinite(), "mass", "the matrix has non-finite entries");
     check_symmetric(M - M.transpose(), M.cwiseAbs().maxCoeff());
-    Mass out;
-    out.kind_ = Kind::dense;
-    out.M_ = M;
-    out.dllt_ = std::make_shared<Eigen::LLT<Matrix>>(M);
-    NVIB_CHECK(out.dllt_->info() == Eigen::Success, "mass", "the dense mass matrix is not positive definite");
-    out.d_ = M.diagonal();
-    return out;
+    auto data = std::make_shared<Data>();
+    data->kind = Kind::dense;
+    data->M = M;
+    data->dllt = std::make_shared<Eigen::LLT<Matrix>>(M);
+    NVIB_CHECK(data->dllt->info() == Eigen::Success, "mass", "the dense mass matrix is not positive definite");
+    data->d = M.diagonal();
+    return Mass(std::move(data));
   }
 
-  Kind kind() const { return kind_; }
-  bool is_diagonal() const { return kind_ == Kind::diagonal; }
-  Index size() const { return d_.size(); }
-  const Vector& diagonal_entries() const { return d_; }
+  Kind kind() const { return data_->kind; }
+  bool is_diagonal() const { return data_->kind == Kind::diagonal; }
+  Index size() const { return data_->d.size(); }
+  const Vector& diagonal_entries() const { return data_->d; }
   // Stored entries: n (lumped), nnz (sparse), n^2 (dense).
   Index nonzeros() const {
-    return kind_ == Kind::diagonal ? size() : kind_ == Kind::sparse ? static_cast<Index>(S_.nonZeros()) : size() * size();
+    return data_->kind == Kind::diagonal ? size() : data_->kind == Kind::sparse ? static_cast<Index>(data_->S.nonZeros()) : size() * size();
   }
 
   // f(i, j, m_ij) for every stored entry (the diagonal, the sparse pattern, or every entry), by columns.
   template <class F>
   void for_each_entry(F&& f) const {
-    if (kind_ == Kind::diagonal) {
-      for (Index i = 0; i < size(); ++i) f(i, i, d_[i]);
-    } else if (kind_ == Kind::sparse) {
-      for (Index j = 0; j < S_.outerSize(); ++j)
-        for (SparseMatrix::InnerIterator it(S_, j); it; ++it) f(static_cast<Index>(it.row()), j, it.value());
+    if (data_->kind == Kind::diagonal) {
+      for (Index i = 0; i < size(); ++i) f(i, i, data_->d[i]);
+    } else if (data_->kind == Kind::sparse) {
+      for (Index j = 0; j < data_->S.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(data_->S, j); it; ++it) f(static_cast<Index>(it.row()), j, it.value());
     } else {
       for (Index j = 0; j < size(); ++j)
-        for (Index i = 0; i < size(); ++i) f(i, j, M_(i, j));
+        for (Index i = 0; i < size(); ++i) f(i, j, data_->M(i, j));
     }
   }
 
   Matrix matrix() const {
-    if (kind_ == Kind::diagonal) return d_.asDiagonal();
-    if (kind_ == Kind::sparse) return Matrix(S_);
-    return M_;
+    if (data_->kind == Kind::diagonal) return data_->d.asDiagonal();
+    if (data_->kind == Kind::sparse) return Matrix(data_->S);
+    return data_->M;
   }
   SparseMatrix sparse_matrix() const {
     SparseMatrix out(size(), size());
@@ -129,25 +129,25 @@ class Mass {
   template <class In, class Out>
   void apply(const Eigen::MatrixBase<In>& x, Eigen::MatrixBase<Out> const& out_) const {
     auto& out = const_cast<Eigen::MatrixBase<Out>&>(out_);
-    if (kind_ == Kind::diagonal)
-      out = d_.cwiseProduct(x);
-    else if (kind_ == Kind::sparse)
-      out.noalias() = S_ * x;
+    if (data_->kind == Kind::diagonal)
+      out = data_->d.cwiseProduct(x);
+    else if (data_->kind == Kind::sparse)
+      out.noalias() = data_->S * x;
     else
-      out.noalias() = M_ * x;
+      out.noalias() = data_->M * x;
   }
 
   // x <- M^{-1} x
   template <class Out>
   void solve_in_place(Eigen::MatrixBase<Out> const& x_) const {
     auto& x = const_cast<Eigen::MatrixBase<Out>&>(x_);
-    if (kind_ == Kind::diagonal) {
-      x.array() *= dinv_.array();
-    } else if (kind_ == Kind::sparse) {
+    if (data_->kind == Kind::diagonal) {
+      x.array() *= data_->dinv.array();
+    } else if (data_->kind == Kind::sparse) {
       work_ = x;
-      x = sllt_->solve(work_);
+      x = data_->sllt->solve(work_);
     } else {
-      dllt_->solveInPlace(x);
+      data_->dllt->solveInPlace(x);
     }
   }
 
@@ -155,10 +155,10 @@ class Mass {
   template <class Out>
   void solve_negated_in_place(Eigen::MatrixBase<Out> const& x_) const {
     auto& x = const_cast<Eigen::MatrixBase<Out>&>(x_);
-    if (kind_ == Kind::diagonal) {
+    if (data_->kind == Kind::diagonal) {
       double* p = x.derived().data();
-      const double* w = ndinv_.data();
-      for (Index i = 0, n = ndinv_.size(); i < n; ++i) p[i] *= w[i];
+      const double* w = data_->ndinv.data();
+      for (Index i = 0, n = data_->ndinv.size(); i < n; ++i) p[i] *= w[i];
     } else {
       solve_in_place(x);
       x = -x;
@@ -182,13 +182,18 @@ class Mass {
   }
   static double max_abs(const Matrix& A) { return A.size() ? A.cwiseAbs().maxCoeff() : 0.0; }
 
-  Kind kind_ = Kind::diagonal;
-  Vector d_, dinv_, ndinv_;
-  Matrix M_;
-  SparseMatrix S_;
-  // Factorisations: immutable once made, shared by copies of the model.
-  std::shared_ptr<const Eigen::LLT<Matrix>> dllt_;
-  std::shared_ptr<const Eigen::SimplicialLLT<SparseMatrix>> sllt_;
+  // What never changes after construction: shared by the copies (one per stepper).
+  struct Data {
+    Kind kind = Kind::diagonal;
+    Vector d, dinv, ndinv;
+    Matrix M;
+    SparseMatrix S;
+    std::shared_ptr<const Eigen::LLT<Matrix>> dllt;
+    std::shared_ptr<const Eigen::SimplicialLLT<SparseMatrix>> sllt;
+  };
+  explicit Mass(std::shared_ptr<const Data> data) : data_(std::move(data)) {}
+
+  std::shared_ptr<const Data> data_ = std::make_shared<const Data>();
   mutable Vector work_;  // the right-hand side of a sparse solve
 };
 

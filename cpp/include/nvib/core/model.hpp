@@ -11,6 +11,7 @@
 // counts the extra evaluations in Stats::num_fd_force_evals.
 #pragma once
 
+#include <memory>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -106,13 +107,15 @@ class Model {
 
   // K and C may be empty (0x0) when absent; they are kept sparse (compressed columns).
   Model(Mass mass, SparseMatrix K, SparseMatrix C, Force force = Force{})
-      : mass_(std::move(mass)), K_(std::move(K)), C_(std::move(C)), f_(std::move(force)) {
+      : mass_(std::move(mass)), f_(std::move(force)) {
     const Index n = mass_.size();
     NVIB_CHECK(n > 0, "mass", "the model has no degree of freedom");
-    has_K_ = check_linear_part(K_, "K", n);
-    has_C_ = check_linear_part(C_, "C", n);
-    absK_ = K_.cwiseAbs();
-    absC_ = C_.cwiseAbs();
+    auto lin = std::make_shared<Linear>();
+    has_K_ = check_linear_part(K, "K", n);
+    has_C_ = check_linear_part(C, "C", n);
+    lin->K = std::move(K);
+    lin->C = std::move(C);
+    lin_ = std::move(lin);
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
     is_linear_ = traits::is_linear(f_);
@@ -132,8 +135,8 @@ class Model {
   const Mass& mass() const { return mass_; }
   bool has_K() const { return has_K_; }
   bool has_C() const { return has_C_; }
-  const SparseMatrix& K() const { return K_; }
-  const SparseMatrix& C() const { return C_; }
+  const SparseMatrix& K() const { return lin_->K; }
+  const SparseMatrix& C() const { return lin_->C; }
   Force& nonlinear_force() { return f_; }
   const Force& nonlinear_force() const { return f_; }
 
@@ -152,8 +155,8 @@ class Model {
   void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) {
     ++st.num_force_evals;
     eval_f(u, v, t, out);
-    if (has_K_) out.noalias() += K_ * u;
-    if (has_C_) out.noalias() += C_ * v;
+    if (has_K_) out.noalias() += lin_->K * u;
+    if (has_C_) out.noalias() += lin_->C * v;
   }
 
   // a = -M^{-1} (K u + C v + f(u, v, t))
@@ -172,8 +175,8 @@ class Model {
       eval_f(u, v, t, out);
       out = out.cwiseAbs();
     }
-    if (has_K_) out.noalias() += absK_ * u.cwiseAbs();
-    if (has_C_) out.noalias() += absC_ * v.cwiseAbs();
+    if (has_K_) add_abs_product(lin_->K, u, out);
+    if (has_C_) add_abs_product(lin_->C, v, out);
   }
 
   // ---- energy accounting ----
@@ -190,7 +193,7 @@ class Model {
   double potential(const CVecRef& u, double t) {
     double e = 0.0;
     if (has_K_) {
-      work_.noalias() = K_ * u;
+      work_.noalias() = lin_->K * u;
       e += 0.5 * u.dot(work_);
     }
     if constexpr (traits::has_energy<Force>::value) e += f_.potential(u, t);
@@ -203,7 +206,7 @@ class Model {
   double dissipated_power(const CVecRef& v) {
     double p = 0.0;
     if (has_C_) {
-      work_.noalias() = C_ * v;
+      work_.noalias() = lin_->C * v;
       p += v.dot(work_);
     }
     if constexpr (traits::has_energy<Force>::value) p += f_.dissipated_power(v);
@@ -219,8 +222,8 @@ class Model {
     } else {
       fd_tangent(u, v, t, Kt, Ct, st);
     }
-    if (has_K_) Kt += K_;
-    if (has_C_) Ct += C_;
+    if (has_K_) Kt += lin_->K;
+    if (has_C_) Ct += lin_->C;
   }
   // The nonlinear force's tangent entries (K and C, in a fixed order) and their values at (u, v, t);
   // K() and C() hold the linear parts. Only where has_sparse_tangent().
@@ -277,7 +280,18 @@ class Model {
   }
 
   Mass mass_;
-  SparseMatrix K_, C_, absK_, absC_;
+  // The linear parts, never changed after construction: shared by the copies of the model.
+  struct Linear {
+    SparseMatrix K, C;
+  };
+  // out += |A| |x| (no stored |A|: it is only needed for round-off estimates)
+  static void add_abs_product(const SparseMatrix& A, const CVecRef& x, VecRef out) {
+    for (Index j = 0; j < A.outerSize(); ++j) {
+      const double xj = std::abs(x[j]);
+      for (SparseMatrix::InnerIterator it(A, j); it; ++it) out[it.row()] += std::abs(it.value()) * xj;
+    }
+  }
+  std::shared_ptr<const Linear> lin_ = std::make_shared<const Linear>();
   Force f_{};
   bool has_K_ = false, has_C_ = false;
   bool uses_velocity_ = false, uses_time_ = false, is_linear_ = true;

@@ -19,13 +19,14 @@ namespace compiled {
 // loads, evaluated first, whose first term writes the force vector.
 enum Storage { dense_first = 0, unit = 1, difference = 2, two = 3, sparse = 4, dense = 5 };
 
-// One evaluated effect. Its measure is idx/coef[first, last); one of one or
-// two entries is also kept inline in i0, i1, c0, c1 (c1 = 0 for one), and one
-// covering at least half the DOFs densely in dense[offset, offset + n).
+// One evaluated effect. Its measure's DOFs are kept inline for the unit
+// (d = u_i0) and difference (d = u_i0 - u_i1) storages, which store nothing
+// else; the others keep their entries in idx/coef[first, last) (two: i0 and i1
+// inline too), and a dense one (at least half the DOFs) its row in
+// rows[offset, offset + n). 56 bytes: a million springs take 56 MB.
 struct Term {
   std::int32_t first = 0, last = 0;
-  Index i0 = 0, i1 = 0;
-  double c0 = 0.0, c1 = 0.0;
+  std::int32_t i0 = 0, i1 = 0;
   Index offset = 0;
   LawParams p;
 };
@@ -37,19 +38,12 @@ struct Arrays {
   std::vector<double> coef, rows;  // rows: the dense measures
   Vector f_const;  // -P of the constant loads
 
-  template <class V>
-  double measure(const Term& c, const V& x) const {
-    double d = 0.0;
-    for (std::int32_t k = c.first; k < c.last; ++k) d += coef[static_cast<size_t>(k)] * x[idx[static_cast<size_t>(k)]];
-    return d;
-  }
-
   // g . x for storage S.
-  template <Storage S>
-  double measure_of(const Term& c, const double* x) const {
+  template <Storage S, class X>
+  double measure_of(const Term& c, const X& x) const {
     if constexpr (S == unit) return x[c.i0];
     if constexpr (S == difference) return x[c.i0] - x[c.i1];
-    if constexpr (S == two) return c.c0 * x[c.i0] + c.c1 * x[c.i1];
+    if constexpr (S == two) return coef[static_cast<size_t>(c.first)] * x[c.i0] + coef[static_cast<size_t>(c.first) + 1] * x[c.i1];
     if constexpr (S == dense || S == dense_first) {
       const double* w = rows.data() + c.offset;
       double d = 0.0;
@@ -59,6 +53,31 @@ struct Arrays {
     double d = 0.0;
     for (std::int32_t k = c.first; k < c.last; ++k) d += coef[static_cast<size_t>(k)] * x[idx[static_cast<size_t>(k)]];
     return d;
+  }
+  // g . x for a storage known at run time.
+  template <class X>
+  double measure(Storage s, const Term& c, const X& x) const {
+    switch (s) {
+      case unit: return measure_of<unit>(c, x);
+      case difference: return measure_of<difference>(c, x);
+      case two: return measure_of<two>(c, x);
+      case dense:
+      case dense_first: return measure_of<dense>(c, x);
+      case sparse: break;
+    }
+    return measure_of<sparse>(c, x);
+  }
+  // f(dof, g_dof) for every entry of the measure.
+  template <class F>
+  void for_each_entry(Storage s, const Term& c, F&& f) const {
+    if (s == unit) {
+      f(Index(c.i0), 1.0);
+    } else if (s == difference) {
+      f(Index(c.i0), 1.0);
+      f(Index(c.i1), -1.0);
+    } else {
+      for (std::int32_t k = c.first; k < c.last; ++k) f(idx[static_cast<size_t>(k)], coef[static_cast<size_t>(k)]);
+    }
   }
 };
 
@@ -89,8 +108,8 @@ void add_forces(const Arrays& a, const Group& g, const double* u, const double* 
     } else if constexpr (S == two) {
       if constexpr (L::id == Law::hertz_contact)
         if (f == 0.0) continue;  // an open contact adds nothing
-      out[c->i0] += c->c0 * f;
-      out[c->i1] += c->c1 * f;
+      out[c->i0] += a.coef[static_cast<size_t>(c->first)] * f;
+      out[c->i1] += a.coef[static_cast<size_t>(c->first) + 1] * f;
     } else if constexpr (S == dense || S == dense_first) {
       const double* w = a.rows.data() + c->offset;
       if (S == dense_first && g.writes && c == g.begin) {
@@ -148,7 +167,7 @@ void add_tangents(const Arrays& a, const Group& g, const double* u, const double
       A[c->i1 + c->i0 * ld] -= s;
       A[c->i1 + c->i1 * ld] += s;
     } else {
-      const double s = slope(*c, a.measure(*c, x));
+      const double s = slope(*c, a.measure(g.storage, *c, x));
       if (s == 0.0) continue;
       for (std::int32_t i = c->first; i < c->last; ++i)
         for (std::int32_t j = c->first; j < c->last; ++j)
@@ -166,9 +185,9 @@ void tangent_entries(const Arrays& a, const Group& g, std::vector<Entry>& K, std
   if constexpr (L::is_load) return;
   std::vector<Entry>& out = L::uses_velocity ? C : K;
   for (const Term* c = g.begin; c != g.end; ++c)
-    for (std::int32_t i = c->first; i < c->last; ++i)
-      for (std::int32_t j = c->first; j < c->last; ++j)
-        out.push_back({static_cast<int>(a.idx[static_cast<size_t>(i)]), static_cast<int>(a.idx[static_cast<size_t>(j)])});
+    a.for_each_entry(g.storage, *c, [&](Index i, double) {
+      a.for_each_entry(g.storage, *c, [&](Index j, double) { out.push_back({static_cast<int>(i), static_cast<int>(j)}); });
+    });
 }
 
 // Their values: df/dd g_i g_j (or df/dd'), advancing K or C past the group's entries.
@@ -181,12 +200,12 @@ void tangent_values(const Arrays& a, const Group& g, const double* u, const doub
   for (const Term* c = g.begin; c != g.end; ++c) {
     double s;
     if constexpr (L::uses_velocity)
-      s = L::damping(c->p, a.measure(*c, x));
+      s = L::damping(c->p, a.measure(g.storage, *c, x));
     else
-      s = L::stiffness(c->p, a.measure(*c, x), t);
-    for (std::int32_t i = c->first; i < c->last; ++i)
-      for (std::int32_t j = c->first; j < c->last; ++j)
-        *out++ = s * a.coef[static_cast<size_t>(i)] * a.coef[static_cast<size_t>(j)];
+      s = L::stiffness(c->p, a.measure(g.storage, *c, x), t);
+    a.for_each_entry(g.storage, *c, [&](Index, double gi) {
+      a.for_each_entry(g.storage, *c, [&](Index, double gj) { *out++ = s * gi * gj; });
+    });
   }
 }
 
