@@ -164,6 +164,21 @@ inline fx::EffectArray make_array(const std::string& type, const py::array_t<std
   return fx::make_effect_array(parse_law(type), std::move(vi), std::move(vj), named, n, std::move(sig), name);
 }
 
+// The model's K (law spring) or C (law damper) with the linear arrays' entries added in.
+inline nvib::SparseMatrix linear_matrix(const PyModel& p, fx::Law law) {
+  return p.visit([&](auto& md) {
+    const nvib::SparseMatrix& A = law == fx::Law::spring ? md.K() : md.C();
+    std::vector<Eigen::Triplet<double, int>> all;
+    p.effects().add_linear_array_entries(law, all);
+    if (all.empty()) return A.rows() ? A : nvib::SparseMatrix(md.size(), md.size());
+    for (Index j = 0; j < A.outerSize(); ++j)
+      for (nvib::SparseMatrix::InnerIterator it(A, j); it; ++it) all.emplace_back(it.row(), int(j), it.value());
+    nvib::SparseMatrix out(md.size(), md.size());
+    out.setFromTriplets(all.begin(), all.end());
+    return out;
+  });
+}
+
 // (K_t, C_t) as sparse matrices: the linear parts plus the force's entries.
 template <class ModelT>
 py::tuple sparse_tangent(ModelT& md, const Vector& u, const Vector& v, double t) {
@@ -280,12 +295,10 @@ inline void bind_models(py::module_& m) {
       })
       .def_property_readonly("mass_matrix", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().matrix(); }); })
       .def_property_readonly("mass_sparse", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().sparse_matrix(); }); })
-      .def_property_readonly("K", [](const PyModel& p) {
-        return p.visit([](auto& md) { return md.has_K() ? md.K() : nvib::SparseMatrix(md.size(), md.size()); });
-      })
-      .def_property_readonly("C", [](const PyModel& p) {
-        return p.visit([](auto& md) { return md.has_C() ? md.C() : nvib::SparseMatrix(md.size(), md.size()); });
-      })
+      .def_property_readonly("K", [](const PyModel& p) { return linear_matrix(p, fx::Law::spring); },
+                             "the linear stiffness: K given, linear springs (those of arrays included)")
+      .def_property_readonly("C", [](const PyModel& p) { return linear_matrix(p, fx::Law::damper); },
+                             "the linear damping: C given, linear dampers (those of arrays included)")
       .def_property_readonly("has_sparse_tangent", [](const PyModel& p) {
         return p.visit([](auto& md) { return md.has_sparse_tangent(); });
       })

@@ -15,6 +15,7 @@
 
 #include "../core/interrupt.hpp"
 #include "../core/mass.hpp"
+#include "array_kernels.hpp"
 #include "compiled_terms.hpp"
 #include "effect.hpp"
 #include "effect_array.hpp"
@@ -86,34 +87,19 @@ class CompiledEffects {
   const Vector& constant_load() const { return a_.f_const; }  // -P of the constant loads
   const compiled::Arrays& arrays_of_terms() const { return a_; }
   const std::vector<compiled::Group>& groups() const { return groups_; }
+  const std::vector<arrays::ArrayGroup>& array_groups() const { return array_groups_; }
   bool uses_velocity() const { return active_velocity_; }
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return linear_; }
 
  private:
-  // An array: linear springs and dampers into K and C, constant loads into the constant vector,
-  // the rest evaluated each step (compiled with the single effects).
-  void take_array(size_t q, LinearParts* linear) {
+  // An array: constant loads into the constant vector, the rest evaluated each step by the array
+  // kernels (array_kernels.hpp), linear springs and dampers included.
+  void take_array(size_t q, LinearParts*) {
     const EffectArray& e = arrays_[q];
     if (e.size() == 0) return;
     uses_time_ = uses_time_ || e.uses_time();
     linear_ = linear_ && e.is_linear();
-    const bool spring = e.law == Law::spring, damper = e.law == Law::damper;
-    if (linear && (spring || damper)) {
-      auto& out = spring ? linear->k : linear->c;
-      out.reserve(out.size() + 4 * e.size());
-      for (size_t k = 0; k < e.size(); ++k) {
-        const double c = e.value(0, k);
-        const int i = e.i[k], j = e.j[k];
-        out.emplace_back(i, i, c);
-        if (j >= 0) {
-          out.emplace_back(j, j, c);
-          out.emplace_back(i, j, -c);
-          out.emplace_back(j, i, -c);
-        }
-      }
-      return;
-    }
     if (e.law == Law::constant_force) {
       for (size_t k = 0; k < e.size(); ++k) {
         a_.f_const[e.i[k]] -= e.value(0, k);
@@ -150,8 +136,9 @@ class CompiledEffects {
   void compile() {
     using namespace compiled;
     a_.n = a_.f_const.size();
+    a_.no_constant_load = a_.f_const.size() == 0 || a_.f_const.cwiseAbs().maxCoeff() == 0.0;
     const Index n = a_.n;
-    // One source per evaluated effect: a single effect (array = -1) or element k of an array.
+    // One source per evaluated single effect (the arrays keep their own form, below).
     struct Source {
       std::int32_t array;
       std::uint32_t k;
@@ -168,17 +155,10 @@ class CompiledEffects {
       return e.is_load() ? dense_first : dense;  // a load's force needs no measure
     };
     std::vector<Source> sources;
-    size_t total = active_.size();
-    for (size_t q : active_arrays_) total += arrays_[q].size();
+    const size_t total = active_.size();
     sources.reserve(total);
     for (size_t i : active_)
       sources.push_back({-1, static_cast<std::uint32_t>(i), all_[i].law, single_storage(all_[i])});
-    for (size_t q : active_arrays_) {
-      const EffectArray& e = arrays_[q];
-      for (size_t k = 0; k < e.size(); ++k)
-        sources.push_back({static_cast<std::int32_t>(q), static_cast<std::uint32_t>(k), e.law,
-                           e.j[k] < 0 ? unit : difference});
-    }
     // Dense loads first, then by law and storage: each group is one instantiated loop.
     std::stable_sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) {
       const bool fa = a.storage == dense_first, fb = b.storage == dense_first;
@@ -194,15 +174,6 @@ class CompiledEffects {
       if ((terms_.size() & 0xFFFF) == 0) poll_interrupt();  // large models: every 65536 terms
       Term c;
       c.first = static_cast<std::int32_t>(a_.idx.size());
-      if (src.array >= 0) {  // unit or difference: the DOFs inline, nothing in idx/coef
-        const EffectArray& e = arrays_[static_cast<size_t>(src.array)];
-        c.i0 = c.i1 = e.i[src.k];
-        if (e.j[src.k] >= 0) c.i1 = e.j[src.k];
-        c.last = c.first;
-        c.p = e.params(src.k);
-        terms_.push_back(c);
-        continue;
-      }
       const Effect& e = all_[src.k];
       if (!e.index.empty()) c.i0 = c.i1 = static_cast<std::int32_t>(e.index[0]);
       if (e.index.size() > 1) c.i1 = static_cast<std::int32_t>(e.index[1]);
@@ -224,6 +195,28 @@ class CompiledEffects {
       c.p = e.params();
       terms_.push_back(c);
     }
+    // The arrays: their own kernels over their own index arrays.
+    array_groups_.clear();
+    per_params_.clear();
+    for (size_t q : active_arrays_) {
+      const EffectArray& e = arrays_[q];
+      arrays::ArrayGroup g;
+      g.law = e.law;
+      g.i = e.i.data();
+      g.j = e.j.data();
+      g.size = e.size();
+      bool varying = false;
+      for (const auto& v : e.values) varying = varying || v.size() > 1;
+      g.uniform = e.params(0);
+      if (varying) {
+        std::vector<LawParams> per(e.size());
+        for (size_t k = 0; k < e.size(); ++k) per[k] = e.params(k);
+        per_params_.push_back(std::move(per));
+        g.per = per_params_.back().data();
+      }
+      g.kernel = arrays::kernel_for(e.law, !varying);
+      array_groups_.push_back(g);
+    }
     groups_.clear();
     for (size_t i = 0; i < terms_.size(); ++i) {
       const Law law = sources[i].law;
@@ -243,6 +236,8 @@ class CompiledEffects {
   bool uses_time_ = false, linear_ = true, active_velocity_ = false;
   std::vector<compiled::Term> terms_;
   std::vector<compiled::Group> groups_;
+  std::vector<arrays::ArrayGroup> array_groups_;
+  std::vector<std::vector<LawParams>> per_params_;  // arrays whose parameters vary: one set per effect
 };
 
 }  // namespace effects

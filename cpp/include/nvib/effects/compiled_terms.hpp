@@ -37,6 +37,7 @@ struct Arrays {
   std::vector<Index> idx;
   std::vector<double> coef, rows;  // rows: the dense measures
   Vector f_const;  // -P of the constant loads
+  bool no_constant_load = false;  // f_const is all zero
 
   // g . x for storage S.
   template <Storage S, class X>
@@ -113,8 +114,12 @@ void add_forces(const Arrays& a, const Group& g, const double* u, const double* 
     } else if constexpr (S == dense || S == dense_first) {
       const double* w = a.rows.data() + c->offset;
       if (S == dense_first && g.writes && c == g.begin) {
-        const double* base = a.f_const.data();
-        for (Index i = 0; i < a.n; ++i) out[i] = base[i] + w[i] * f;
+        if (a.no_constant_load) {  // one stream less: no constant vector to read
+          for (Index i = 0; i < a.n; ++i) out[i] = w[i] * f;
+        } else {
+          const double* base = a.f_const.data();
+          for (Index i = 0; i < a.n; ++i) out[i] = base[i] + w[i] * f;
+        }
       } else {
         for (Index i = 0; i < a.n; ++i) out[i] += w[i] * f;
       }

@@ -38,6 +38,14 @@ class EffectSet {
   const std::vector<EffectArray>& arrays() const { return c_->arrays(); }
   size_t num_evaluated() const { return c_->num_evaluated(); }  // single effects and those of arrays
   const Vector& constant_load() const { return c_->constant_load(); }  // -P of the constant loads
+  // The entries of the linear springs (law spring) or dampers (law damper) of the arrays, which are
+  // evaluated by their kernels rather than assembled: added to K or C where those are shown.
+  void add_linear_array_entries(Law law, std::vector<Eigen::Triplet<double, int>>& out) const {
+    for (const arrays::ArrayGroup& g : c_->array_groups())
+      if (g.law == law)
+        for (size_t k = 0; k < g.size; ++k)
+          arrays::for_each_pair(g, k, [&](int r, int col, double gg) { out.emplace_back(r, col, gg * g.params(k).p0); });
+  }
 
   void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
@@ -55,6 +63,7 @@ class EffectSet {
       for (Index i = 0; i < a.n; ++i) op[i] = base[i] + z;
     }
     for (; g != c_->groups().end(); ++g) g->kernel(a, *g, up, vp, t, op);
+    for (const arrays::ArrayGroup& ag : c_->array_groups()) ag.kernel(ag, up, vp, t, op);
   }
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
@@ -69,17 +78,23 @@ class EffectSet {
     }
     for (const compiled::Group& g : c_->groups())
       dispatch(g.law, [&](auto L) { compiled::add_tangents<decltype(L)>(a, g, u.data(), v.data(), t, k, c, ld); });
+    for (const arrays::ArrayGroup& ag : c_->array_groups())
+      dispatch(ag.law, [&](auto L) { arrays::add_tangents<decltype(L)>(ag, u.data(), v.data(), t, k, c, ld); });
   }
   // The tangent entry by entry (sparse models): entries once, values at each state, in the same order.
   void tangent_entries(std::vector<Entry>& K, std::vector<Entry>& C) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
     for (const compiled::Group& g : c_->groups())
       dispatch(g.law, [&](auto L) { compiled::tangent_entries<decltype(L)>(a, g, K, C); });
+    for (const arrays::ArrayGroup& ag : c_->array_groups())
+      dispatch(ag.law, [&](auto L) { arrays::tangent_entries<decltype(L)>(ag, K, C); });
   }
   void tangent_values(const CVecRef& u, const CVecRef& v, double t, double* K, double* C) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
     for (const compiled::Group& g : c_->groups())
       dispatch(g.law, [&](auto L) { compiled::tangent_values<decltype(L)>(a, g, u.data(), v.data(), t, K, C); });
+    for (const arrays::ArrayGroup& ag : c_->array_groups())
+      dispatch(ag.law, [&](auto L) { arrays::tangent_values<decltype(L)>(ag, u.data(), v.data(), t, K, C); });
   }
   // out_i = |constant loads|_i + sum over terms of |g_i f|: the round-off scale of the force.
   void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
@@ -92,6 +107,14 @@ class EffectSet {
           a.for_each_entry(g.storage, *c, [&](Index i, double gi) { out[i] += std::abs(gi) * f; });
         }
       });
+    for (const arrays::ArrayGroup& ag : c_->array_groups())
+      dispatch(ag.law, [&](auto L) {
+        for (size_t k = 0; k < ag.size; ++k) {
+          const double f = std::abs(decltype(L)::value(ag.params(k), ag.measure(k, u), ag.measure(k, v), t));
+          out[ag.i[k]] += f;
+          if (ag.j[k] >= 0) out[ag.j[k]] += f;
+        }
+      });
   }
   // Flags of the evaluated part (K and C carry the rest).
   bool uses_velocity() const { return c_->uses_velocity(); }
@@ -102,24 +125,40 @@ class EffectSet {
   // loads; the model adds what K and C carry.
   double potential(const CVecRef& u, double t) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
-    return sum_terms(0.0, [&](auto L, compiled::Storage s, const compiled::Term& c) {
+    const double e = sum_terms(0.0, [&](auto L, compiled::Storage s, const compiled::Term& c) {
       return decltype(L)::potential(c.p, a.measure(s, c, u), t);
+    });
+    return sum_arrays(e, u.data(), nullptr, [&](auto L, const LawParams& p, double d, double) {
+      return decltype(L)::potential(p, d, t);
     });
   }
   double input_power(const CVecRef& u, const CVecRef& v, double t) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
-    return sum_terms(-a.f_const.dot(v), [&](auto L, compiled::Storage s, const compiled::Term& c) {
+    const double w = sum_terms(-a.f_const.dot(v), [&](auto L, compiled::Storage s, const compiled::Term& c) {
       return effects::input_power<decltype(L)>(c.p, a.measure(s, c, u), a.measure(s, c, v), t);
+    });
+    return sum_arrays(w, u.data(), v.data(), [&](auto L, const LawParams& p, double d, double dd) {
+      return effects::input_power<decltype(L)>(p, d, dd, t);
     });
   }
   double dissipated_power(const CVecRef& v) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
-    return sum_terms(0.0, [&](auto L, compiled::Storage s, const compiled::Term& c) {
+    const double w = sum_terms(0.0, [&](auto L, compiled::Storage s, const compiled::Term& c) {
       using Lw = decltype(L);
       if constexpr (is_dissipative<Lw>()) {
         return effects::dissipated_power<Lw>(c.p, a.measure(s, c, v));
       } else {
         (void)c;
+        return 0.0;
+      }
+    });
+    return sum_arrays(w, nullptr, v.data(), [&](auto L, const LawParams& p, double, double dd) {
+      using Lw = decltype(L);
+      if constexpr (is_dissipative<Lw>()) {
+        return effects::dissipated_power<Lw>(p, dd);
+      } else {
+        (void)p;
+        (void)dd;
         return 0.0;
       }
     });
@@ -135,6 +174,16 @@ class EffectSet {
         double s = 0.0;
         for (const compiled::Term* c = g.begin; c != g.end; ++c) s += fn(L, g.storage, *c);
         return s;
+      });
+    return e;
+  }
+  // init + sum over the arrays' effects of fn(L, params, measure of u, measure of v) (u, v may be null).
+  template <class Fn>
+  double sum_arrays(double init, const double* u, const double* v, Fn&& fn) const {
+    double e = init;
+    for (const arrays::ArrayGroup& g : c_->array_groups())
+      e += dispatch(g.law, [&](auto L) {
+        return arrays::sum(g, u, v, [&](const LawParams& p, double d, double dd) { return fn(L, p, d, dd); });
       });
     return e;
   }

@@ -65,11 +65,17 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
   Status step() {
     const double t1 = this->next_time();
     if (scheme_.velocity == CentralDifference::Velocity::synchronized) {
-      u_ += h_ * v_ + (0.5 * h_ * h_) * a_;
-      if (model_.uses_velocity()) {
-        vstar_ = v_ + h_ * a_;
+      if (model_.uses_velocity()) {  // u and the velocity predictor in one pass over memory
+        const double c = 0.5 * h_ * h_, h = h_;
+        double *u = u_.data(), *vs = vstar_.data();
+        const double *v = v_.data(), *a = a_.data();
+        for (Index i = 0, n = u_.size(); i < n; ++i) {
+          u[i] += h * v[i] + c * a[i];
+          vs[i] = v[i] + h * a[i];
+        }
         model_.acceleration(u_, vstar_, t1, anew_, stats_);
       } else {
+        u_ += h_ * v_ + (0.5 * h_ * h_) * a_;
         model_.acceleration(u_, v_, t1, anew_, stats_);
       }
       v_ += (0.5 * h_) * (a_ + anew_);
