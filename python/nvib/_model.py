@@ -132,11 +132,10 @@ class Model:
         self.force = force
         self.tangent = tangent
         self.name = str(name)
-        self.effects = None
+        self._declared = effects is not None
         self.python_laws: list[str] = []  # where each Python law sits ("effects[3]")
         self.without = (without,) if isinstance(without, str) else tuple(without)
         builtin, laws, arrays = [], [], []
-        self.effect_arrays: list = []
         if effects is not None:
             effects = list(effects)
             known = {e.get("name") for e in effects if isinstance(e, dict)} | {
@@ -156,8 +155,6 @@ class Model:
                     arrays.append(self._effect_array(i, e))
                 else:
                     builtin.append(self._effect(i, e))
-            self.effects = builtin
-            self.effect_arrays = arrays
             self.python_laws = [law[4] for law in laws]
         elif self.without:
             raise _checks.value_error("without", "only a model of declared effects can leave effects out")
@@ -312,6 +309,17 @@ class Model:
             return _core.Effect(kind, index, coef, params, name=name, **signal)
         except ArgumentError as exc:  # names the parameter: make it effects[i].<parameter>
             raise _checks.value_error(f"{where}.{exc.argument}", str(exc).split(": ", 1)[1]) from None
+
+    @property
+    def effects(self) -> list | None:
+        """The built-in effects declared one by one (``_core.Effect``; None for a model declared
+        without ``effects``). Held by the core; this list is made on each access."""
+        return self._core.effects if self._declared else None
+
+    @property
+    def effect_arrays(self) -> list:
+        """The effect arrays (``_core.EffectArray``), held by the core; made on each access."""
+        return self._core.effect_arrays
 
     @property
     def uses_velocity(self) -> bool:

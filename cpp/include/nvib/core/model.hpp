@@ -119,11 +119,6 @@ class Model {
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
     is_linear_ = traits::is_linear(f_);
-    fu_.resize(n);
-    fv_.resize(n);
-    work_.resize(n);
-    fp_.resize(n);
-    fm_.resize(n);
   }
   // Dense K and C (small models, tests): stored sparse, exact zeros dropped.
   Model(Mass mass, const Matrix& K, const Matrix& C, Force force = Force{})
@@ -187,12 +182,14 @@ class Model {
     return false;
   }
   double kinetic(const CVecRef& v) {
+    work(v.size());
     mass_.apply(v, work_);
     return 0.5 * v.dot(work_);
   }
   double potential(const CVecRef& u, double t) {
     double e = 0.0;
     if (has_K_) {
+      work(u.size());
       work_.noalias() = lin_->K * u;
       e += 0.5 * u.dot(work_);
     }
@@ -206,6 +203,7 @@ class Model {
   double dissipated_power(const CVecRef& v) {
     double p = 0.0;
     if (has_C_) {
+      work(v.size());
       work_.noalias() = lin_->C * v;
       p += v.dot(work_);
     }
@@ -241,6 +239,10 @@ class Model {
   // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
   // a second-order difference); velocity columns only if f uses velocity.
   void fd_tangent(const CVecRef& u, const CVecRef& v, double t, MatRef Kt, MatRef Ct, Stats& st) {
+    if (fp_.size() != size()) {  // allocated on first use: most models never need them
+      fp_.resize(size());
+      fm_.resize(size());
+    }
     fu_ = u;
     fv_ = v;
     fd_columns(fu_, t, Kt, st);
@@ -295,8 +297,11 @@ class Model {
   Force f_{};
   bool has_K_ = false, has_C_ = false;
   bool uses_velocity_ = false, uses_time_ = false, is_linear_ = true;
-  Vector fu_, fv_, fp_, fm_;  // finite-difference workspace
-  Vector work_;               // energy accounting
+  Vector fu_, fv_, fp_, fm_;  // finite-difference workspace (sized on first use)
+  Vector work_;               // energy accounting (sized on first use)
+  void work(Index n) {
+    if (work_.size() != n) work_.resize(n);
+  }
 };
 
 // Deduction helpers.
