@@ -156,8 +156,8 @@ class Mass {
   void solve_negated_in_place(Eigen::MatrixBase<Out> const& x_) const {
     auto& x = const_cast<Eigen::MatrixBase<Out>&>(x_);
     if (data_->kind == Kind::diagonal) {
-      double* p = x.derived().data();
-      const double* w = data_->ndinv.data();
+      double* __restrict p = x.derived().data();
+      const double* __restrict w = data_->ndinv.data();
       for (Index i = 0, n = data_->ndinv.size(); i < n; ++i) p[i] *= w[i];
     } else {
       solve_in_place(x);
