@@ -9,6 +9,8 @@
 
 #include <Eigen/SparseCholesky>
 
+#include "../linalg/sparse_cholesky.hpp"
+
 #include "types.hpp"
 
 namespace nvib {
@@ -59,7 +61,10 @@ class Mass {
     auto data = std::make_shared<Data>();
     data->kind = Kind::sparse;
     data->d = M.diagonal();
-    data->sllt = std::make_shared<Eigen::SimplicialLLT<SparseMatrix>>(M);  // AMD ordering
+    auto llt = std::make_shared<OrderedCholesky<false>>();  // AMD ordering
+    llt->analyze(M);
+    llt->factorize_values(M);
+    data->sllt = llt;
     NVIB_CHECK(data->sllt->info() == Eigen::Success, "mass", "the sparse mass matrix is not positive definite");
     data->S = std::move(M);
     Mass out(std::move(data));
@@ -144,8 +149,13 @@ class Mass {
     if (data_->kind == Kind::diagonal) {
       x.array() *= data_->dinv.array();
     } else if (data_->kind == Kind::sparse) {
-      work_ = x;
-      x = data_->sllt->solve(work_);
+      if constexpr (Out::InnerStrideAtCompileTime == 1) {
+        data_->sllt->solve_in_place(x.derived().data(), work_);
+      } else {
+        Vector y = x;
+        data_->sllt->solve_in_place(y.data(), work_);
+        x = y;
+      }
     } else {
       data_->dllt->solveInPlace(x);
     }
@@ -189,12 +199,12 @@ class Mass {
     Matrix M;
     SparseMatrix S;
     std::shared_ptr<const Eigen::LLT<Matrix>> dllt;
-    std::shared_ptr<const Eigen::SimplicialLLT<SparseMatrix>> sllt;
+    std::shared_ptr<const OrderedCholesky<false>> sllt;
   };
   explicit Mass(std::shared_ptr<const Data> data) : data_(std::move(data)) {}
 
   std::shared_ptr<const Data> data_ = std::make_shared<const Data>();
-  mutable Vector work_;  // the right-hand side of a sparse solve
+  mutable Vector work_;  // the permuted right-hand side of a sparse solve
 };
 
 }  // namespace nvib

@@ -11,7 +11,9 @@
 //     falling back to sparse LU for a matrix LDL^T without pivoting cannot take;
 //   otherwise sparse LU.
 // The factorisation is reused as long as the Newton component keeps S (modified
-// Newton, a linear model).
+// Newton, a linear model). LDL^T refactorises and solves without allocating (see
+// sparse_cholesky.hpp; only its scratch vectors beyond 128 kB go to the heap, Eigen's
+// limit for the stack); sparse LU allocates in every factorisation and solve.
 #pragma once
 
 #include <algorithm>
@@ -25,6 +27,7 @@
 #include "../core/interrupt.hpp"
 #include "../core/types.hpp"
 #include "iteration_matrix.hpp"
+#include "sparse_cholesky.hpp"
 
 namespace nvib {
 
@@ -81,7 +84,7 @@ class SparseLinearSolver {
     symmetric_ = is_symmetric(model.K()) && (!velocity_ || is_symmetric(model.C()));
     lu_now_ = !symmetric_;
     if (symmetric_)
-      ldlt_.analyzePattern(S_);
+      ldlt_.analyze(S_);
     else
       lu_.analyzePattern(S_);
     lu_analyzed_ = !symmetric_;
@@ -114,8 +117,8 @@ class SparseLinearSolver {
     K_ = &model.K();
     lu_now_ = !symmetric_;
     if (symmetric_) {
-      ldlt_.factorize(S_);
-      if (ldlt_.info() == Eigen::Success && regular(ldlt_.vectorD())) {
+      ldlt_.factorize_values(S_);
+      if (ldlt_.info() == Eigen::Success && regular(ldlt_.pivots())) {
         st.linear_solver = name();
         return true;
       }
@@ -131,11 +134,12 @@ class SparseLinearSolver {
   }
 
   void solve_in_place(Vector& x) const {
-    work_ = x;
-    if (lu_now_)
+    if (lu_now_) {
+      work_ = x;
       x = lu_.solve(work_);
-    else
-      x = ldlt_.solve(work_);
+    } else {
+      ldlt_.solve_in_place(x.data(), work_);
+    }
   }
   void multiply_C(const Vector& x, Vector& out) const {
     if (velocity_)
@@ -214,7 +218,7 @@ class SparseLinearSolver {
   std::vector<Entry> kent_, cent_;
   std::vector<double> kvals_, cvals_, mvals_;
   std::vector<int> posM_, posK_, posC_, posNK_, posNC_, posCtC_, posCtN_;
-  Eigen::SimplicialLDLT<SparseMatrix> ldlt_;
+  OrderedCholesky<true> ldlt_;
   Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>> lu_;
   mutable Vector work_;
   Vector kdiag_;
