@@ -55,7 +55,15 @@ class ClockPoll {
 
   // True about every period of work (then the caller observes); cheap otherwise.
   bool tick() {
-    if (--countdown_ > 0) return false;
+    if (--countdown_ > 0) return false;  // the per-step path: inlined into the caller's loop
+    return read_clock();
+  }
+
+ private:
+#if defined(__GNUC__)
+  __attribute__((noinline))
+#endif
+  bool read_clock() {
     const auto now = clock::now();
     const auto since = now - last_read_;
     if (since < std::chrono::microseconds(500) && stride_ < (std::int64_t(1) << 24))
@@ -69,7 +77,6 @@ class ClockPoll {
     return true;
   }
 
- private:
   clock::duration period_;
   clock::time_point last_read_, last_fire_;
   std::int64_t stride_ = 1, countdown_ = 1;

@@ -80,6 +80,14 @@ struct has_sparse_tangent_method<
 NVIB_OPTIONAL_FLAG(has_sparse_tangent, has_sparse_tangent_method<F>::value)
 #undef NVIB_OPTIONAL_FLAG
 
+// eval(const double* u, const double* v, double t, double* out): the force on contiguous arrays.
+template <class F, class = void>
+struct has_pointer_eval : std::false_type {};
+template <class F>
+struct has_pointer_eval<F, std::void_t<decltype(std::declval<const F&>().eval(
+                               std::declval<const double*>(), std::declval<const double*>(), 0.0,
+                               std::declval<double*>()))>> : std::true_type {};
+
 // Energy accounting of a force: potential(u, t), input_power(u, v, t), dissipated_power(v).
 template <class F, class = void>
 struct has_energy : std::false_type {};
@@ -158,6 +166,21 @@ class Model {
   void acceleration(const CVecRef& u, const CVecRef& v, double t, VecRef a, Stats& st) {
     force(u, v, t, a, st);
     mass_.solve_negated_in_place(a);
+  }
+
+  // The same on the steppers' own vectors: a force with eval() on pointers is called with their
+  // data, without the two Eigen::Ref temporaries (and their destructors) of the general form, which
+  // on a 6-DOF model cost as much as its mass solve.
+  void acceleration(const Vector& u, const Vector& v, double t, Vector& a, Stats& st) {
+    if constexpr (traits::has_pointer_eval<Force>::value) {
+      ++st.num_force_evals;
+      f_.eval(u.data(), v.data(), t, a.data());
+      if (has_K_) a.noalias() += lin_->K * u;
+      if (has_C_) a.noalias() += lin_->C * v;
+      mass_.solve_negated_in_place(a);
+    } else {
+      acceleration(CVecRef(u), CVecRef(v), t, VecRef(a), st);
+    }
   }
 
   // out_i = sum of |terms| of (K u + C v + f)_i: the scale of its round-off

@@ -94,9 +94,38 @@ struct Group {
   bool writes;
 };
 
+// The dense loads (a ground acceleration's M r a_g(t)): the group's first term writes the force vector
+// when the group `writes`, with the constant loads if there are any; the others add. A load reads no
+// state, so there is no measure to form and no per-term test in the loops.
+template <class L>
+void add_dense_loads(const Arrays& a, const Group& g, double t, double* __restrict out) {
+  const Term* c = g.begin;
+  const Index n = a.n;
+  if (g.writes && c != g.end) {
+    const double f = L::value(c->p, 0.0, 0.0, t);
+    const double* __restrict w = a.rows.data() + c->offset;
+    if (a.no_constant_load) {  // one stream less: no constant vector to read
+      for (Index i = 0; i < n; ++i) out[i] = w[i] * f;
+    } else {
+      const double* __restrict base = a.f_const.data();
+      for (Index i = 0; i < n; ++i) out[i] = base[i] + w[i] * f;
+    }
+    ++c;
+  }
+  for (; c != g.end; ++c) {
+    const double f = L::value(c->p, 0.0, 0.0, t);
+    const double* __restrict w = a.rows.data() + c->offset;
+    for (Index i = 0; i < n; ++i) out[i] += w[i] * f;
+  }
+}
+
 // out += g^T f for every term of the group (or = for the first dense load).
 template <class L, Storage S>
 void add_forces(const Arrays& a, const Group& g, const double* u, const double* v, double t, double* out) {
+  if constexpr (S == dense_first && L::is_load) {
+    add_dense_loads<L>(a, g, t, out);
+    return;
+  }
   for (const Term* c = g.begin; c != g.end; ++c) {
     const double d = uses_displacement<L>() ? a.measure_of<S>(*c, u) : 0.0;
     const double dd = L::uses_velocity ? a.measure_of<S>(*c, v) : 0.0;

@@ -48,10 +48,11 @@ class EffectSet {
   }
 
   void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
+    eval(u.data(), v.data(), t, out.data());
+  }
+  // The same on contiguous storage of size(): Model calls it with its vectors' data, no Eigen::Ref formed.
+  void eval(const double* up, const double* vp, double t, double* op) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
-    const double* up = u.data();
-    const double* vp = v.data();
-    double* op = out.data();
     auto g = c_->groups().begin();
     if (g != c_->groups().end() && g->writes) {
       g->kernel(a, *g, up, vp, t, op);  // writes constant loads + its loads

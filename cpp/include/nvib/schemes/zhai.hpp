@@ -59,9 +59,16 @@ class ZhaiStepper : public StepperBase<ModelT> {
 
   Status step() {
     const double t1 = this->next_time();
-    const double psi = scheme_.psi, phi = scheme_.phi, h2 = h_ * h_;
-    u_ += h_ * v_ + ((0.5 + psi) * h2) * a_ - (psi * h2) * aprev_;
-    v_ += ((1.0 + phi) * h_) * a_ - (phi * h_) * aprev_;
+    const double psi = scheme_.psi, phi = scheme_.phi, h2 = h_ * h_, h = h_;
+    const double cu = (0.5 + psi) * h2, cp = psi * h2, va = (1.0 + phi) * h_, vp = phi * h_;
+    // One plain loop (see CentralDifference): u reads v_n, then v advances; the vector forms' order.
+    double* u = u_.data();
+    double* v = v_.data();
+    const double *a = a_.data(), *ap = aprev_.data();
+    for (Index i = 0, n = u_.size(); i < n; ++i) {
+      u[i] += h * v[i] + cu * a[i] - cp * ap[i];
+      v[i] += va * a[i] - vp * ap[i];
+    }
     aprev_.swap(a_);
     model_.acceleration(u_, v_, t1, a_, stats_);
     return this->advance();
