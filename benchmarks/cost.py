@@ -114,7 +114,7 @@ def loop_rows(kind: str, exe: str, model, ref, dts, dofs, t_end: float, repeats:
             with np.errstate(all="ignore"):
                 err = float(np.max(np.abs(u[keep] - u_ref)) / np.max(np.abs(u_ref)))
             ok = math.isfinite(err)
-            label = "LCDM" if scheme == "cd" else f"CEMDTS({ETA:g})"
+            label = {"cd": "LCDM", "cemdts": f"CEMDTS({ETA:g})", "zhai": "Zhai(0.5,0.5)"}[scheme]
             rows.append({**{f: float("nan") for f in FIELDS}, "contender": "C++ loop", "scheme": label,
                          "label": f"hand-written {label}", "dt": dt, "t_end": t_end, "dofs": ",".join(dofs),
                          "max_error": err if ok else math.inf, "energy_error": float("nan"),

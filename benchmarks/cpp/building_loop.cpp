@@ -15,6 +15,10 @@
 //             a_{n+1} = acc(u_{n+1}, t_{n+1})
 //             v_{n+1} = v_n + h [(1/2 - eta) a_{n+1} + (1/2 + 2 eta) a_n - eta a_{n-1}]
 //             a_{-1} = a_0
+//   zhai    Zhai(psi, phi) at psi = phi = 1/2 (nvib's defaults):
+//             u_{n+1} = u_n + h v_n + h^2 [(1/2 + psi) a_n - psi a_{n-1}]
+//             v_{n+1} = v_n + h [(1 + phi) a_n - phi a_{n-1}]
+//             a_{n+1} = acc(u_{n+1}, t_{n+1}),   a_{-1} = a_0
 //
 // The output (t, u, v, a of the saved states: steps 0, k, 2k, ... and the last
 // one, the rows nvib's solve() returns) is allocated before the loop and
@@ -110,6 +114,31 @@ State run_cemdts(double h, double eta, std::int64_t nsteps, std::int64_t k, Outp
   return s;
 }
 
+// One run of Zhai(psi, phi); returns the final state.
+State run_zhai(double h, double psi, double phi, std::int64_t nsteps, std::int64_t k, Output& out) {
+  State s{};
+  acc(s.u, 0.0, s.a);
+  double aprev[N];
+  for (int i = 0; i < N; ++i) aprev[i] = s.a[i];  // a_{-1} = a_0
+  std::int64_t row = 0;
+  out.save(row, 0.0, s);
+  const double hh = h * h;
+  const double cu1 = (0.5 + psi) * hh, cu2 = psi * hh, cv1 = (1.0 + phi) * h, cv2 = phi * h;
+  for (std::int64_t n = 1; n <= nsteps; ++n) {
+    const double t = static_cast<double>(n) * h;
+    for (int i = 0; i < N; ++i) {
+      s.u[i] += h * s.v[i] + cu1 * s.a[i] - cu2 * aprev[i];
+      s.v[i] += cv1 * s.a[i] - cv2 * aprev[i];
+      aprev[i] = s.a[i];
+    }
+    acc(s.u, t, s.a);
+    if (n % k == 0 || n == nsteps) out.save(row, t, s);
+  }
+  return s;
+}
+
+const char* const kSchemes[] = {"cd", "cemdts", "zhai"};
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -121,7 +150,7 @@ int main(int argc, char** argv) {
   const std::int64_t nsteps = std::llround(t_end / h);
   using clock = std::chrono::steady_clock;
 
-  for (int scheme = 0; scheme < 2; ++scheme) {
+  for (int scheme = 0; scheme < 3; ++scheme) {
     for (const std::int64_t k : args.save_every) {
       // reuse: one preallocated output, warmed by an untimed run, filled again by every timed run.
       // fresh: the output allocated in every timed run (inside the timing, page faults included).
@@ -130,7 +159,9 @@ int main(int argc, char** argv) {
       double checksum = 0.0;
       std::int64_t rows = 0;
       auto run = [&](Output& out) {
-        return scheme == 0 ? run_cd(h, nsteps, k, out) : run_cemdts(h, eta, nsteps, k, out);
+        if (scheme == 0) return run_cd(h, nsteps, k, out);
+        if (scheme == 1) return run_cemdts(h, eta, nsteps, k, out);
+        return run_zhai(h, 0.5, 0.5, nsteps, k, out);
       };
       Output kept = Output::allocate(nsteps, k);
       last = run(kept);
@@ -144,7 +175,7 @@ int main(int argc, char** argv) {
       for (std::int64_t j = 0; j < kept.rows * N; j += 97) checksum += kept.u[j];
       rows = kept.rows;
       if (!dump.empty()) {
-        const std::string path = dump + (scheme == 0 ? ".cd." : ".cemdts.") + std::to_string(k) + ".bin";
+        const std::string path = dump + "." + kSchemes[scheme] + "." + std::to_string(k) + ".bin";
         if (!write_doubles(path, kept.u.get(), static_cast<size_t>(kept.rows * N))) return 1;
       }
       for (int r = 0; r < repeats; ++r) {
@@ -164,7 +195,7 @@ int main(int argc, char** argv) {
       std::sort(fresh.begin(), fresh.end());
       std::printf("{\"scheme\": \"%s\", \"save_every\": %lld, \"steps\": %lld, \"saved\": %lld, \"repeats\": %d, "
                   "\"best\": %.9g, \"median\": %.9g, \"best_fresh\": %.9g, \"checksum\": %.17g, ",
-                  scheme == 0 ? "cd" : "cemdts", static_cast<long long>(k), static_cast<long long>(nsteps),
+                  kSchemes[scheme], static_cast<long long>(k), static_cast<long long>(nsteps),
                   static_cast<long long>(rows), repeats, times.front(), times[times.size() / 2], fresh.front(),
                   checksum);
       print_json_state(last);

@@ -144,5 +144,9 @@ int main(int argc, char** argv) {
     bench("cemdts", nvib::CEMDTS(a.eta), scene, a.h, a.t_end, a.repeats, k);
     bench("cemdts_functor", nvib::CEMDTS(a.eta), functor, a.h, a.t_end, a.repeats, k);
   }
+  for (const std::int64_t k : a.save_every) {
+    bench("zhai", nvib::Zhai(), scene, a.h, a.t_end, a.repeats, k);
+    bench("zhai_functor", nvib::Zhai(), functor, a.h, a.t_end, a.repeats, k);
+  }
   return 0;
 }

@@ -157,7 +157,7 @@ inline bool displacement_ok(const Vector& u, double bound) {
   const double* p = u.data();
   const double finite_bound = std::min(bound, std::numeric_limits<double>::max());
   bool ok = true;
-  for (Index i = 0, n = u.size(); i < n; ++i) ok &= std::abs(p[i]) <= finite_bound;
+  detail::for_each_index(u.size(), [&ok, p, finite_bound](Index i) { ok &= std::abs(p[i]) <= finite_bound; });
   return ok;
 }
 // Every entry of v and a finite.

@@ -166,13 +166,16 @@ class Mass {
   void solve_negated_in_place(Eigen::MatrixBase<Out> const& x_) const {
     auto& x = const_cast<Eigen::MatrixBase<Out>&>(x_);
     if (data_->kind == Kind::diagonal) {
-      double* __restrict p = x.derived().data();
-      const double* __restrict w = data_->ndinv.data();
-      for (Index i = 0, n = data_->ndinv.size(); i < n; ++i) p[i] *= w[i];
+      scale(data_->ndinv.size(), x.derived().data(), data_->ndinv.data());
     } else {
       solve_in_place(x);
       x = -x;
     }
+  }
+
+  // p_i *= w_i (unrolled up to 8 entries: detail::for_each_index)
+  static void scale(Index n, double* __restrict p, const double* __restrict w) {
+    detail::for_each_index(n, [=](Index i) { p[i] *= w[i]; });
   }
 
   // S += c M (S dense)

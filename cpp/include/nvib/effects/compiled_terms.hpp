@@ -105,10 +105,10 @@ void add_dense_loads(const Arrays& a, const Group& g, double t, double* __restri
     const double f = L::value(c->p, 0.0, 0.0, t);
     const double* __restrict w = a.rows.data() + c->offset;
     if (a.no_constant_load) {  // one stream less: no constant vector to read
-      for (Index i = 0; i < n; ++i) out[i] = w[i] * f;
+      detail::for_each_index(n, [=](Index i) { out[i] = w[i] * f; });
     } else {
       const double* __restrict base = a.f_const.data();
-      for (Index i = 0; i < n; ++i) out[i] = base[i] + w[i] * f;
+      detail::for_each_index(n, [=](Index i) { out[i] = base[i] + w[i] * f; });
     }
     ++c;
   }

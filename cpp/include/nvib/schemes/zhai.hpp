@@ -61,20 +61,23 @@ class ZhaiStepper : public StepperBase<ModelT> {
     const double t1 = this->next_time();
     const double psi = scheme_.psi, phi = scheme_.phi, h2 = h_ * h_, h = h_;
     const double cu = (0.5 + psi) * h2, cp = psi * h2, va = (1.0 + phi) * h_, vp = phi * h_;
-    // One plain loop (see CentralDifference): u reads v_n, then v advances; the vector forms' order.
-    double* u = u_.data();
-    double* v = v_.data();
-    const double *a = a_.data(), *ap = aprev_.data();
-    for (Index i = 0, n = u_.size(); i < n; ++i) {
-      u[i] += h * v[i] + cu * a[i] - cp * ap[i];
-      v[i] += va * a[i] - vp * ap[i];
-    }
+    advance_state(u_.size(), u_.data(), v_.data(), a_.data(), aprev_.data(), h, cu, cp, va, vp);
     aprev_.swap(a_);
     model_.acceleration(u_, v_, t1, a_, stats_);
     return this->advance();
   }
 
   const Zhai& scheme() const { return scheme_; }
+
+  // u += h v + cu a - cp a_prev, then v += va a - vp a_prev, entry by entry (u reads v_n), on
+  // non-overlapping arrays, unrolled up to 8 DOFs (see CentralDifference).
+  static void advance_state(Index n, double* __restrict u, double* __restrict v, const double* __restrict a,
+                            const double* __restrict ap, double h, double cu, double cp, double va, double vp) {
+    detail::for_each_index(n, [=](Index i) {
+      u[i] += h * v[i] + cu * a[i] - cp * ap[i];
+      v[i] += va * a[i] - vp * ap[i];
+    });
+  }
 
   // State: [u; v; a; a_{n-1}].
   Index state_size() const { return 4 * this->size(); }
