@@ -25,7 +25,7 @@ exponent <= 1.2 from 10^3 to 10^5; at most 400 bytes per DOF for the chain
 beyond the saved history. Exponents are least-squares slopes of log(time per
 step) against log(n).
 
-    python benchmarks/scale.py [--quick] [--out benchmarks/results/scale.md]
+    python benchmarks/scale.py [--quick] [--out benchmarks/results/scale.md] [--replot]
 """
 
 from __future__ import annotations
@@ -128,6 +128,8 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="up to 10^5 DOFs (a check of the script)")
     ap.add_argument("--cxx", default=os.environ.get("CXX", "g++"))
     ap.add_argument("--out", default=os.path.join(HERE, "results", "scale.md"))
+    ap.add_argument("--replot", action="store_true",
+                    help="rewrite the table and the PNG from the measurements of the last run (the .json beside --out)")
     args = ap.parse_args()
     if args.case:
         print(json.dumps(run_case(args.case[0], int(args.case[1]), args.case[2])))
@@ -137,24 +139,34 @@ def main() -> int:
 
     from building import CXXFLAGS, machine_info
 
-    chain_n = [n for n in CHAIN_N if not args.quick or n <= 100_000]
-    lattice_nx = [nx for nx in LATTICE_NX if not args.quick or nx <= 316]
-    load = os.getloadavg()[0]
-    rows = []
-    for kind, sizes in (("chain", chain_n), ("lattice", lattice_nx)):
-        for key in SCHEMES:
-            for size in sizes:
-                r = case_in_subprocess(kind, size, key)
-                rows.append(r)
-                print(f"{kind} {r['n']:>9,} {key:8s} {r['per_step'] * 1e6:12.2f} us/step "
-                      f"{r['per_step'] / r['n'] * 1e9:8.2f} ns/step/DOF {r['bytes_per_dof']:8.0f} B/DOF "
-                      f"{r['linear_solver']}", file=sys.stderr)
-                if key not in EXPLICIT and r["per_step"] > SLOW_STEP:
-                    break
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = os.path.join(tmp, "chain_loop")
-        subprocess.run([args.cxx, *CXXFLAGS, os.path.join(HERE, "cpp", "chain_loop.cpp"), "-o", exe], check=True)
-        hand = {n: hand_loop(exe, n) for n in chain_n}
+    raw = os.path.splitext(args.out)[0] + ".json"
+    if args.replot:
+        with open(raw, encoding="utf-8") as fh:
+            data = json.load(fh)
+        rows, chain_n, header = data["rows"], data["chain_n"], data["header"]
+        hand = {int(n): v for n, v in data["hand"].items()}
+    else:
+        chain_n = [n for n in CHAIN_N if not args.quick or n <= 100_000]
+        lattice_nx = [nx for nx in LATTICE_NX if not args.quick or nx <= 316]
+        load = os.getloadavg()[0]
+        rows = []
+        for kind, sizes in (("chain", chain_n), ("lattice", lattice_nx)):
+            for key in SCHEMES:
+                for size in sizes:
+                    r = case_in_subprocess(kind, size, key)
+                    rows.append(r)
+                    print(f"{kind} {r['n']:>9,} {key:8s} {r['per_step'] * 1e6:12.2f} us/step "
+                          f"{r['per_step'] / r['n'] * 1e9:8.2f} ns/step/DOF {r['bytes_per_dof']:8.0f} B/DOF "
+                          f"{r['linear_solver']}", file=sys.stderr)
+                    if key not in EXPLICIT and r["per_step"] > SLOW_STEP:
+                        break
+        with tempfile.TemporaryDirectory() as tmp:
+            exe = os.path.join(tmp, "chain_loop")
+            subprocess.run([args.cxx, *CXXFLAGS, os.path.join(HERE, "cpp", "chain_loop.cpp"), "-o", exe], check=True)
+            hand = {n: hand_loop(exe, n) for n in chain_n}
+        header = machine_info(args.cxx, load)
+        with open(raw, "w", encoding="utf-8") as fh:  # the measurements, for --replot
+            json.dump({"rows": rows, "hand": hand, "chain_n": chain_n, "header": header}, fh, indent=1)
     by = {(r["model"], r["scheme"]): [] for r in rows}
     for r in rows:
         by[(r["model"], r["scheme"])].append(r)
@@ -208,14 +220,14 @@ def main() -> int:
     ax.set_title("memory (peak RSS of a fresh process)")
     ax.set_ylim(0, None)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=6, ncol=2)
+    ax.legend(fontsize=6, ncol=2, loc="center", bbox_to_anchor=(0.5, 0.6))  # between the two groups of lines
     fig.tight_layout()
     png = os.path.splitext(args.out)[0] + ".png"
     fig.savefig(png, dpi=110)
 
     # ---- table
     lines = ["# Scale: time per step and memory from 10 to 10^6 DOFs", ""]
-    lines += machine_info(args.cxx, load)
+    lines += header
     lines += ["", f"![time per step and memory]({os.path.basename(png)})", "",
               "| model | n | scheme | steps | per step [us] | per step per DOF [ns] | Newton it. per step | "
               "linear solver | build [s] | bytes per DOF | peak RSS [MB] |",
@@ -247,6 +259,22 @@ def main() -> int:
               f"- Memory: at most {chain_bytes:.0f} bytes per DOF for the chain at 10^5 DOFs and more with the "
               f"explicit schemes (target <= 400: {met(chain_bytes <= 400)}); the implicit schemes add their "
               "factorisation (see the table)."]
+    nmax = max(chain_n)
+    cdmax = next(r for r in by[("chain", "cd")] if r["n"] == nmax)
+    lines += ["", "## Reading", "",
+              f"The explicit exponent is not a property of the algorithm (each step is O(n + nnz) with no "
+              f"allocation) but of the memory hierarchy: from 10^5 to 10^6 DOFs the working set leaves the caches, "
+              f"and the hand-written loop's own exponent is {hand_exp:.3f}. nvib's is higher because a step passes "
+              f"over memory several times (the update of u, the force by kind of effect: loads, springs, "
+              f"dampers, the mass solve, the update of v) and reads the effects' index arrays, where the "
+              f"hand-written loop makes three passes over five arrays and computes its indices: the ratio grows from {ratio5:.2f}x at 10^5 to "
+              f"{cdmax['per_step'] / hand[nmax]['per_step']:.2f}x at {nmax:,}. Fusing those passes is not done. "
+              f"The implicit schemes on the chain stay near-linear (a tridiagonal LDLT has no fill-in); on the "
+              f"lattice (bandwidth nx) the factorisation fills in and the exponent is "
+              f"{exps[('lattice', 'newmark')]:.2f}, near the n^1.5 of factorising a 2-D grid with a fill-reducing "
+              f"ordering (nested dissection), with about "
+              f"{max(r['bytes_per_dof'] for r in rows if r['model'] == 'lattice' and r['scheme'] == 'newmark' and r['n'] >= MEMORY_FROM):.0f} "
+              "bytes per DOF for the factor."]
     text = "\n".join(lines) + "\n"
     print(text)
     with open(args.out, "w", encoding="utf-8") as fh:
