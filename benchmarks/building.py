@@ -192,25 +192,34 @@ def reference_cd(model, dt: float):
 
 
 # ---- report ----------------------------------------------------------------------------
-def machine_info(cxx: str, load: float) -> list[str]:
-    cpu = "unknown"
+def cpu_name() -> str:
+    """The CPU's model name (Linux), or "unknown"."""
     try:
-        with open("/proc/cpuinfo") as fh:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
             for line in fh:
                 if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
+                    return line.split(":", 1)[1].strip()
     except OSError:
         pass
+    return "unknown"
+
+
+def git_revision() -> str:
+    """`git describe --always --dirty` of the checkout, or "unknown"."""
+    try:
+        return subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True,
+                              text=True).stdout.strip() or "unknown"
+    except OSError:
+        return "unknown"
+
+
+def machine_info(cxx: str, load: float) -> list[str]:
+    cpu = cpu_name()
     try:
         gxx = subprocess.run([cxx, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
     except (OSError, IndexError):
         gxx = cxx
-    try:
-        rev = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True,
-                             text=True).stdout.strip() or "unknown"
-    except OSError:
-        rev = "unknown"
+    rev = git_revision()
     core_flags = "unknown"
     for cache in glob.glob(os.path.join(ROOT, "build", "*", "CMakeCache.txt")):
         with open(cache) as fh:

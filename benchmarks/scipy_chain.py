@@ -75,20 +75,9 @@ SCIPY = ["RK45", "DOP853", "BDF", "LSODA"]
 # ---------------------------------------------------------------- machine
 
 def machine_info() -> list[str]:
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    try:
-        rev = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True,
-                             text=True).stdout.strip() or "unknown"
-    except OSError:
-        rev = "unknown"
+    from building import cpu_name, git_revision
+
+    cpu, rev = cpu_name(), git_revision()
     return [
         f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
         f"- CPU: {cpu}, {os.cpu_count()} logical CPUs; {platform.system()} {platform.release()}",

@@ -67,6 +67,29 @@ def _signal(where: str, spec) -> dict:
     return out
 
 
+def _law_parameters(where: str, kind: str, spec: dict, convert) -> tuple[dict, dict]:
+    """The parameters of law `kind` given in `spec`, each as convert("effects[i].<key>", value),
+    and its signal's keyword arguments (empty without one)."""
+    required, optional = EFFECT_PARAMETERS[kind]
+    signal_key = _core.laws()[kind]["signal"]
+    params, signal = {}, {}
+    for key in list(required) + list(optional):
+        if key not in spec:
+            continue
+        if key == signal_key:
+            signal = _signal(f"{where}.{key}", spec[key])
+        else:
+            params[key] = convert(f"{where}.{key}", spec[key])
+    return params, signal
+
+
+def _effect_name(where: str, spec: dict) -> str:
+    name = spec.get("name", "")
+    if not isinstance(name, str):
+        raise _checks.type_error(f"{where}.name", "expected a string")
+    return name
+
+
 class Model:
     """M a + K u + C v + F(u, v, t) = 0 with F the declared effects and an optional force callable.
 
@@ -190,9 +213,7 @@ class Model:
             if not isinstance(value, bool):
                 raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
             flags.append(value)
-        name = spec.get("name", "")
-        if not isinstance(name, str):
-            raise _checks.type_error(f"{where}.name", "expected a string")
+        _effect_name(where, spec)
         return (index, coef, law, tangent, where, *flags)
 
     def _effect_array(self, i: int, spec: dict) -> "_core.EffectArray":
@@ -211,23 +232,14 @@ class Model:
         jdx = self._dof_array(f"{where}.j", spec["j"], ground=True) if spec.get("j") is not None else None
         if jdx is not None and jdx.shape != idx.shape:
             raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
-        signal_key = _core.laws()[kind]["signal"]
-        params, signal = {}, {}
-        for key in list(required) + list(optional):
-            if key not in spec:
-                continue
-            if key == signal_key:
-                signal = _signal(f"{where}.{key}", spec[key])
-                continue
-            value = spec[key]
-            arr = _checks.real_array(f"{where}.{key}", value)
+        def per_effect(arg: str, value) -> np.ndarray:
+            arr = _checks.real_array(arg, value)
             if arr.ndim > 1 or (arr.ndim == 1 and arr.size not in (1, idx.size)):
-                raise _checks.value_error(f"{where}.{key}", f"expected one value or {idx.size} (one per effect), "
-                                                            f"got shape {arr.shape}")
-            params[key] = np.ascontiguousarray(arr.reshape(-1))
-        name = spec.get("name", "")
-        if not isinstance(name, str):
-            raise _checks.type_error(f"{where}.name", "expected a string")
+                raise _checks.value_error(arg, f"expected one value or {idx.size} (one per effect), got shape {arr.shape}")
+            return np.ascontiguousarray(arr.reshape(-1))
+
+        params, signal = _law_parameters(where, kind, spec, per_effect)
+        name = _effect_name(where, spec)
         try:
             return _core.EffectArray(kind, idx, jdx if jdx is not None else np.empty(0, dtype=np.int32), params,
                                      self.n, name=name, **signal)
@@ -293,18 +305,8 @@ class Model:
         for key in required:
             if key not in spec:
                 raise _checks.value_error(f"{where}.{key}", f"missing parameter of {kind}")
-        signal_key = _core.laws()[kind]["signal"]
-        params, signal = {}, {}
-        for key in list(required) + list(optional):
-            if key not in spec:
-                continue
-            if key == signal_key:
-                signal = _signal(f"{where}.{key}", spec[key])
-            else:
-                params[key] = _checks.real(f"{where}.{key}", spec[key])
-        name = spec.get("name", "")
-        if not isinstance(name, str):
-            raise _checks.type_error(f"{where}.name", "expected a string")
+        params, signal = _law_parameters(where, kind, spec, _checks.real)
+        name = _effect_name(where, spec)
         try:
             return _core.Effect(kind, index, coef, params, name=name, **signal)
         except ArgumentError as exc:  # names the parameter: make it effects[i].<parameter>
