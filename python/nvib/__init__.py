@@ -25,6 +25,7 @@ from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, Diverg
                       SingularMatrixError)
 from ._labels import scheme_label
 from ._model import EFFECT_PARAMETERS, Model
+from ._records import STANDARD_GRAVITY, GroundMotion, RecordError
 from ._scenes import SceneError, load_scene, scene_names
 from ._schemes import Newton, schemes
 from ._solve import Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
@@ -39,7 +40,7 @@ __version__ = "0.1.0"
 
 __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError",
-    "Estimate", "estimate",
+    "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",

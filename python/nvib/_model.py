@@ -9,6 +9,7 @@ import numpy as np
 from . import _checks, _core
 from ._core import ArgumentError
 from ._names import GeneratedNames, NumberedNames
+from ._records import GroundMotion
 
 def _effect_parameters() -> dict[str, tuple[tuple[str, ...], dict[str, object]]]:
     """(required, optional-with-default) parameters of each built-in effect type, from the C++ laws;
@@ -34,12 +35,18 @@ _SIGNAL_KEYS = {"sine": (("amplitude", "omega"), {"phase": 0.0}), "table": (("t"
 
 
 def _signal(where: str, spec) -> dict:
-    """A signal: {kind = "sine", amplitude, omega, phase = 0} or {kind = "table", t = [...], values = [...]}."""
+    """A signal: {kind = "sine", amplitude, omega, phase = 0}, {kind = "table", t = [...], values = [...]},
+    a GroundMotion, or {kind = "record", file = ..., scale = 1, dt = ...} (a record file, see GroundMotion)."""
+    if isinstance(spec, GroundMotion):
+        spec = spec.signal()
+    elif isinstance(spec, dict) and spec.get("kind") == "record":
+        spec = GroundMotion.from_spec(where, spec).signal()
     if not isinstance(spec, dict):
-        raise _checks.type_error(where, f"expected a table with 'kind' = 'sine' or 'table', got {type(spec).__name__}")
+        raise _checks.type_error(where, f"expected a table with 'kind' = 'sine', 'table' or 'record', or a "
+                                        f"GroundMotion, got {type(spec).__name__}")
     kind = spec.get("kind")
     if kind not in _SIGNAL_KEYS:
-        raise _checks.value_error(f"{where}.kind", f"expected 'sine' or 'table', got {kind!r}")
+        raise _checks.value_error(f"{where}.kind", f"expected 'sine', 'table' or 'record', got {kind!r}")
     required, optional = _SIGNAL_KEYS[kind]
     for key in spec:
         if key != "kind" and key not in required and key not in optional:

@@ -11,6 +11,7 @@ import numpy as np
 from . import _checks
 from ._core import ArgumentError
 from ._model import Model
+from ._records import GroundMotion
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -91,6 +92,18 @@ def load_scene(name_or_path: str, *, without=()) -> Model:
     return model
 
 
+def _with_records(path: str, i: int, effect):
+    """The effect with a record signal ({kind = "record", file = ...}) read, its file relative to the scene's."""
+    signal = effect.get("signal") if isinstance(effect, dict) else None
+    if not (isinstance(signal, dict) and signal.get("kind") == "record"):
+        return effect
+    try:
+        record = GroundMotion.from_spec(f"effects[{i}].signal", signal, base_dir=os.path.dirname(os.path.abspath(path)))
+    except (ValueError, TypeError) as exc:
+        raise SceneError(f"{path}: {exc}", key="effect") from None
+    return {**effect, "signal": record}
+
+
 def _require(path: str, table: dict, key: str, where: str):
     if key not in table:
         raise SceneError(f"{path}: [{where}] {key}: missing")
@@ -127,6 +140,7 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     effects = data.get("effect", [])
     if not isinstance(effects, list):
         raise SceneError(f"{path}: effect: expected [[effect]] tables")
+    effects = [_with_records(path, i, e) for i, e in enumerate(effects)]
 
     initial = data.get("initial", {})
     for key in initial:

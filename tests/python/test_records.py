@@ -1,0 +1,203 @@
+"""Ground-motion records: the readers (AT2, one and two columns, arrays), their errors (file and
+line named), the record as a signal (linear between samples, zero after), records in scenes."""
+
+import copy
+import os
+import pickle
+
+import numpy as np
+import pytest
+
+import nvib
+from nvib import GroundMotion, RecordError
+
+VALUES = [0.0, 0.0125, -0.031, 0.047, -0.0205, 0.0089, 0.0]  # in g
+
+
+def write(path, text):
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    return str(path)
+
+
+def at2(tmp_path, values=VALUES, header="NPTS=    {n}, DT=   .0100 SEC", per_line=5, name="rec.AT2"):
+    lines = ["PEER NGA STRONG MOTION DATABASE RECORD",
+             "Test event 2026, Test station, 090",
+             "ACCELERATION TIME SERIES IN UNITS OF G",
+             header.format(n=len(values))]
+    for k in range(0, len(values), per_line):
+        lines.append("".join(f"{v:15.7E}" for v in values[k:k + per_line]))
+    return write(tmp_path / name, "\n".join(lines) + "\n")
+
+
+# ---- AT2 ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("header", ["NPTS=    {n}, DT=   .0100 SEC", "   {n}   0.0100   NPTS, DT"])
+def test_at2_both_header_styles(tmp_path, header):
+    gm = GroundMotion.from_at2(at2(tmp_path, header=header))
+    np.testing.assert_array_equal(gm.a, VALUES)
+    np.testing.assert_allclose(gm.t, 0.01 * np.arange(len(VALUES)), rtol=0, atol=1e-15)
+    assert gm.dt == pytest.approx(0.01, rel=1e-12)
+    assert gm.pga == 0.047 and gm.duration == pytest.approx(0.06, rel=1e-12)
+    assert gm.units == "g" and gm.name == "rec.AT2" and len(gm) == len(VALUES)
+    assert "7 samples" in repr(gm) and "pga=0.047 g" in repr(gm)
+
+
+def test_at2_scale_to_si(tmp_path):
+    gm = GroundMotion.from_at2(at2(tmp_path), scale=nvib.STANDARD_GRAVITY)
+    np.testing.assert_array_equal(gm.a, np.array(VALUES) * 9.80665)
+    assert gm.units == ""  # scaled: no longer in g
+    assert GroundMotion.from_file(at2(tmp_path)) == GroundMotion.from_at2(at2(tmp_path))  # by its extension
+
+
+def test_at2_errors_name_file_and_line(tmp_path):
+    path = write(tmp_path / "noheader.AT2", "title\nevent\nunits\nnothing here\n 0.1 0.2\n")
+    with pytest.raises(RecordError, match=r"noheader.AT2, line 4: no NPTS and DT") as exc:
+        GroundMotion.from_at2(path)
+    assert exc.value.line == 4 and exc.value.path == path
+
+    path = at2(tmp_path, header="NPTS=    {n}, DT=   .0100 SEC".replace("{n}", "9"), name="short.AT2")
+    with pytest.raises(RecordError, match=r"short.AT2, line 4: NPTS = 9, but 7 values follow the header"):
+        GroundMotion.from_at2(path)
+
+    path = at2(tmp_path, name="bad.AT2")
+    with open(path, encoding="utf-8") as fh:
+        lines = fh.read().splitlines()
+    lines[5] = lines[5][:15] + "  abc"
+    write(path, "\n".join(lines) + "\n")
+    with pytest.raises(RecordError, match=r"bad.AT2, line 6: 'abc' is not a number") as exc:
+        GroundMotion.from_at2(path)
+    assert exc.value.line == 6
+
+    with pytest.raises(RecordError, match="no such file"):
+        GroundMotion.from_at2(tmp_path / "missing.AT2")
+    path = at2(tmp_path, header="NPTS=    {n}, DT=   0.0 SEC", name="zerodt.AT2")
+    with pytest.raises(RecordError, match=r"line 4: DT = 0.0 must be > 0"):
+        GroundMotion.from_at2(path)
+
+
+# ---- plain files and arrays ----------------------------------------------------------------------
+
+def test_one_and_two_columns(tmp_path):
+    one = write(tmp_path / "one.txt", "# a in m/s^2\n" + "\n".join(str(v) for v in VALUES) + "\n")
+    gm = GroundMotion.from_file(one, dt=0.02, scale=2.0)
+    np.testing.assert_array_equal(gm.a, np.array(VALUES) * 2.0)
+    assert gm.dt == pytest.approx(0.02) and gm.t[0] == 0.0
+    with pytest.raises(nvib.ArgumentError, match="give their time step dt") as exc:
+        GroundMotion.from_file(one)
+    assert exc.value.argument == "dt"
+
+    t = [0.0, 0.01, 0.03, 0.06]
+    two = write(tmp_path / "two.csv", "\n".join(f"{a}, {b}" for a, b in zip(t, VALUES)) + "\n")
+    gm = GroundMotion.from_file(two)
+    np.testing.assert_array_equal(gm.t, t)
+    assert gm.dt is None  # uneven steps
+    with pytest.raises(nvib.ArgumentError, match="its times are given"):
+        GroundMotion.from_file(two, dt=0.01)
+
+    ragged = write(tmp_path / "ragged.txt", "0 1\n0.1 2\n0.2\n")
+    with pytest.raises(RecordError, match=r"ragged.txt, line 3: expected 2 columns as on line 1, got 1"):
+        GroundMotion.from_file(ragged)
+    backwards = write(tmp_path / "back.txt", "0 1\n0.2 2\n0.1 3\n")
+    with pytest.raises(RecordError, match="times must increase strictly"):
+        GroundMotion.from_file(backwards)
+    word = write(tmp_path / "word.txt", "1\n2\nx3\n")
+    with pytest.raises(RecordError, match=r"word.txt, line 3: 'x3' is not a number"):
+        GroundMotion.from_file(word, dt=0.1)
+
+
+def test_from_array_scaled_and_values():
+    gm = GroundMotion.from_array([0.0, 1.0, -2.0], dt=0.5, t0=1.0, name="a")
+    np.testing.assert_array_equal(gm.t, [1.0, 1.5, 2.0])
+    half = gm.scaled(0.5)
+    np.testing.assert_array_equal(half.a, [0.0, 0.5, -1.0])
+    assert half.pga == 1.0 and gm.pga == 2.0  # the original is unchanged
+    # linear between samples, zero outside the record
+    np.testing.assert_array_equal(gm([0.5, 1.25, 1.75, 2.0, 2.5]), [0.0, 0.5, -0.5, -2.0, 0.0])
+    with pytest.raises(nvib.ArgumentError) as exc:
+        GroundMotion.from_array([1.0, 2.0], dt=-1.0)
+    assert exc.value.argument == "dt"
+    with pytest.raises(nvib.ArgumentError) as exc:
+        GroundMotion.from_array([1.0, np.nan], dt=0.1)
+    assert exc.value.argument == "a"
+
+
+def test_pickle_and_copy_round_trip(tmp_path):
+    gm = GroundMotion.from_at2(at2(tmp_path))
+    for other in (pickle.loads(pickle.dumps(gm)), copy.copy(gm), copy.deepcopy(gm)):
+        assert other == gm and other is not gm
+
+
+# ---- a record as the ground motion of a model ------------------------------------------------------
+
+def free_mass(signal):
+    return nvib.Model([2.0, 3.0], effects=[{"type": "ground_acceleration", "signal": signal}])
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.004])
+def test_free_mass_follows_the_record_then_floats(dt):
+    """A free mass under a ground acceleration has a = -a_g(t) exactly: the record interpolated
+    linearly between samples, and zero after its last sample, when the velocity stays constant."""
+    gm = GroundMotion.from_array(VALUES, dt=0.01, scale=9.80665)
+    res = nvib.solve(free_mass(gm), nvib.CentralDifference(), dt=dt, t_end=0.12)
+    for j in range(2):
+        np.testing.assert_allclose(res.a[:, j], -gm(res.t), rtol=0, atol=1e-13 * gm.pga)
+    after = res.t > gm.t[-1] + 1e-12
+    assert after.sum() >= 5
+    np.testing.assert_array_equal(res.a[after], 0.0)
+    assert np.all(res.v[after] == res.v[after][0])  # free flight at constant velocity
+
+
+def test_record_equals_its_table():
+    gm = GroundMotion.from_array(VALUES, dt=0.01)
+    a = nvib.solve(free_mass(gm), nvib.CEMDTS(), dt=0.003, t_end=0.1)
+    b = nvib.solve(free_mass({"kind": "table", "t": gm.t.tolist(), "values": VALUES}), nvib.CEMDTS(), dt=0.003,
+                   t_end=0.1)
+    np.testing.assert_array_equal(a.u, b.u)
+
+
+SCENE = """
+[scene]
+name = "sdof_record"
+t_end = 0.2
+dt = 0.001
+
+[dofs]
+names = ["x"]
+mass = [1e3]
+
+[[effect]]
+type = "spring"
+measure = {{ x = 1.0 }}
+k = 4e5
+
+[[effect]]
+type = "ground_acceleration"
+signal = {signal}
+"""
+
+
+def test_scene_reads_record_relative_to_its_file(tmp_path, monkeypatch):
+    sub = tmp_path / "scenes"
+    sub.mkdir()
+    at2(sub, name="quake.AT2")
+    scene = write(sub / "sdof.toml", SCENE.format(signal='{ kind = "record", file = "quake.AT2", scale = 9.80665 }'))
+    monkeypatch.chdir(tmp_path)  # the record is found next to the scene, not in the working directory
+    model = nvib.load_scene(scene)
+    direct = nvib.Model([1e3], effects=[
+        {"type": "spring", "measure": {0: 1.0}, "k": 4e5},
+        {"type": "ground_acceleration", "signal": GroundMotion.from_at2(sub / "quake.AT2", scale=9.80665)}])
+    a = nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=0.2)
+    b = nvib.solve(direct, nvib.Newmark(), dt=1e-3, t_end=0.2)
+    np.testing.assert_array_equal(a.u, b.u)
+    assert np.max(np.abs(a.u)) > 0
+
+
+def test_scene_with_a_bad_record_names_it(tmp_path):
+    scene = write(tmp_path / "s.toml", SCENE.format(signal='{ kind = "record", file = "nowhere.AT2" }'))
+    with pytest.raises(nvib.SceneError, match=r"s.toml: .*nowhere.AT2: no such file"):
+        nvib.load_scene(scene)
+    at2(tmp_path, name="one.txt", header="x")  # not an AT2 by name: read as columns, and the header is text
+    scene = write(tmp_path / "t.toml", SCENE.format(signal='{ kind = "record", file = "one.txt", dt = 0.01 }'))
+    with pytest.raises(nvib.SceneError, match=r"one.txt, line 1: expected one column \(a\) or two"):
+        nvib.load_scene(scene)
