@@ -97,6 +97,13 @@ def _effect_name(where: str, spec: dict) -> str:
     return name
 
 
+def _rebuild_model(init, state) -> "Model":
+    mass, kwargs = init
+    model = Model(mass, **kwargs)
+    model.__dict__.update(state)
+    return model
+
+
 class Model:
     """M a + K u + C v + F(u, v, t) = 0 with F the declared effects and an optional force callable.
 
@@ -126,6 +133,11 @@ class Model:
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
                  u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
+        if effects is not None and not isinstance(effects, list):
+            effects = list(effects)  # once: a generator is read here
+        # The arguments, for pickling and copying (the core model is rebuilt from them).
+        self._init = (mass, dict(K=K, C=C, force=force, tangent=tangent, effects=effects, dofs=dofs, u0=u0, v0=v0,
+                                 uses_velocity=uses_velocity, uses_time=uses_time, without=without, name=name))
         if _checks.is_sparse(mass):
             m = _checks.sparse_matrix("mass", mass)
         else:
@@ -191,6 +203,12 @@ class Model:
         # With Python in the loop (force or callable laws) the GIL is kept during runs.
         self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, bool(uses_velocity), bool(uses_time), laws,
                                  arrays)
+
+    def __reduce__(self):
+        """Pickled as its arguments and its attributes (u0, v0, scene, ...): the core is rebuilt on loading, so
+        a model goes to another process (a process pool, Dask) as long as its callables pickle."""
+        state = {k: v for k, v in self.__dict__.items() if k not in ("_core", "_lookup", "_init")}
+        return (_rebuild_model, (self._init, state))
 
     def _python_law(self, i: int, spec: dict):
         """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},

@@ -30,6 +30,10 @@ class RecordError(ValueError):
         super().__init__(f"{path}{f', line {line}' if line else ''}: {message}")
         self.path = path
         self.line = line
+        self.reason = message
+
+    def __reduce__(self):
+        return (RecordError, (self.path, self.line, self.reason))
 
 
 def _number(path: str, line: int, text: str) -> float:

@@ -2,6 +2,7 @@
 // NumPy views of the C++ storage (no copy), kept alive by the Result.
 #pragma once
 
+#include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -134,6 +135,32 @@ inline void bind_result(py::module_& m) {
       })
       .def_readonly("scheme", &PyResult::scheme)
       .def_readonly("dt", &PyResult::dt)
+      .def(py::pickle(
+          [](const PyResult& p) {
+            const nvib::Result& r = p.r;
+            return py::make_tuple(r.t, r.u, r.v, r.a, r.energy, r.dofs, r.stats, r.status, r.failure,
+                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names);
+          },
+          [](const py::tuple& x) {
+            if (x.size() != 14) raise_value_error("state", "not a pickled Result");
+            auto p = std::make_unique<PyResult>();
+            nvib::Result& r = p->r;
+            r.t = x[0].cast<nvib::Vector>();
+            r.u = x[1].cast<nvib::History>();
+            r.v = x[2].cast<nvib::History>();
+            r.a = x[3].cast<nvib::History>();
+            r.energy = x[4].cast<nvib::History>();
+            r.dofs = x[5].cast<std::vector<nvib::Index>>();
+            r.stats = x[6].cast<nvib::Stats>();
+            r.status = x[7].cast<nvib::Status>();
+            r.failure = x[8].cast<nvib::Failure>();
+            r.num_steps_requested = x[9].cast<std::int64_t>();
+            r.max_residual = x[10].cast<double>();
+            p->scheme = x[11];
+            p->dt = x[12].cast<double>();
+            p->names = x[13];
+            return p;
+          }))
       .def("__repr__", [](const PyResult& p) {
         char wall[32];
         std::snprintf(wall, sizeof wall, "%.3g", p.r.stats.wall_time);

@@ -74,6 +74,14 @@ inline py::dict stats_dict(const nvib::Stats& s) {
   return d;
 }
 
+// Stats::linear_solver points at a static name: the one a pickled name stands for.
+inline const char* linear_solver_name(const std::string& s) {
+  for (const char* known : {"dense LU", "sparse LDLT", "sparse LU"})
+    if (s == known) return known;
+  if (s.empty()) return "";
+  raise_value_error("linear_solver", "unknown linear solver '" + s + "'");
+}
+
 inline void bind_types(py::module_& m) {
   using nvib::Failure;
   using nvib::Stats;
@@ -117,6 +125,27 @@ inline void bind_types(py::module_& m) {
       .def_property_readonly("linear_solver", [](const Stats& s) { return std::string(s.linear_solver); },
                              "the implicit schemes' linear solver: 'dense LU', 'sparse LDLT' or 'sparse LU' ('' if none)")
       .def("as_dict", &stats_dict)
+      .def(py::pickle(
+          [](const Stats& s) {
+            return py::make_tuple(s.num_steps, s.num_force_evals, s.num_fd_force_evals, s.num_tangent_evals,
+                                  s.num_newton_iters, s.num_factorizations, s.num_linear_solves, s.num_expm,
+                                  s.wall_time, std::string(s.linear_solver));
+          },
+          [](const py::tuple& x) {
+            if (x.size() != 10) raise_value_error("state", "not a pickled Stats");
+            Stats s;
+            s.num_steps = x[0].cast<std::int64_t>();
+            s.num_force_evals = x[1].cast<std::int64_t>();
+            s.num_fd_force_evals = x[2].cast<std::int64_t>();
+            s.num_tangent_evals = x[3].cast<std::int64_t>();
+            s.num_newton_iters = x[4].cast<std::int64_t>();
+            s.num_factorizations = x[5].cast<std::int64_t>();
+            s.num_linear_solves = x[6].cast<std::int64_t>();
+            s.num_expm = x[7].cast<std::int64_t>();
+            s.wall_time = x[8].cast<double>();
+            s.linear_solver = linear_solver_name(x[9].cast<std::string>());
+            return s;
+          }))
       .def("__repr__", [](const Stats& s) {
         std::string out;
         for (auto item : stats_dict(s))
@@ -131,6 +160,19 @@ inline void bind_types(py::module_& m) {
       .def_readonly("dof", &Failure::dof, "offending DOF for divergence, -1 if not applicable")
       .def_readonly("residuals", &Failure::residuals, "Newton residual norms of the failed step")
       .def_readonly("message", &Failure::message)
+      .def(py::pickle(
+          [](const Failure& f) { return py::make_tuple(f.status, f.step, f.t, f.dof, f.residuals, f.message); },
+          [](const py::tuple& x) {
+            if (x.size() != 6) raise_value_error("state", "not a pickled Failure");
+            Failure f;
+            f.status = x[0].cast<Status>();
+            f.step = x[1].cast<std::int64_t>();
+            f.t = x[2].cast<double>();
+            f.dof = x[3].cast<nvib::Index>();
+            f.residuals = x[4].cast<std::vector<double>>();
+            f.message = x[5].cast<std::string>();
+            return f;
+          }))
       .def("__repr__", [](const Failure& f) { return "Failure(" + std::string(py::repr(py::str(f.message))) + ")"; });
 }
 

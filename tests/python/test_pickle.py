@@ -1,0 +1,110 @@
+"""Pickling and copying: models, schemes, results, counters, failures, ground motions and errors go
+to another process and back unchanged (what process pools and Dask need)."""
+
+import copy
+import pickle
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import nvib
+
+
+def round_trips(obj):
+    return [pickle.loads(pickle.dumps(obj)), copy.copy(obj), copy.deepcopy(obj)]
+
+
+def python_force(u, v, t):  # module level, so that it pickles by reference
+    return 4.0 * u + 0.1 * v + u ** 3
+
+
+def models():
+    n = 50
+    i = np.arange(n)
+    yield "building", nvib.load_scene("building")
+    yield "vehicle (static equilibrium)", nvib.load_scene("vehicle")
+    yield "generated chain (names made on demand)", nvib.scenes.chain(200)
+    yield "arrays", nvib.Model(np.full(n, 2.0), effects=[
+        {"type": "hardening_spring", "i": i, "j": i - 1, "k0": 1e3, "a": np.linspace(1, 3, n)},
+        {"type": "damper", "i": i, "j": i - 1, "c": 1.0},
+        {"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 1.0, "omega": 3.0}}])
+    yield "consistent mass, sparse K", nvib.Model(sp.diags([1.0, 4.0, 1.0], [-1, 0, 1], shape=(n, n)) / 6.0,
+                                                  K=sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(n, n)) * 1e3,
+                                                  u0=np.sin(i / 7.0))
+    yield "Python force", nvib.Model([1.0, 2.0], force=python_force, u0=[0.1, -0.2], dofs=["a", "b"])
+    yield "record", nvib.Model([1.0], effects=[
+        {"type": "spring", "measure": {0: 1.0}, "k": 100.0},
+        {"type": "ground_acceleration", "signal": nvib.GroundMotion.from_array([0, 1, -1, 0.5, 0], dt=0.05)}])
+
+
+@pytest.mark.parametrize("name, model", list(models()), ids=[name for name, _ in models()])
+def test_model_round_trip_gives_the_same_run(name, model):
+    ref = nvib.solve(model, nvib.CEMDTS(), dt=1e-3, t_end=0.2)
+    for other in round_trips(model):
+        assert other is not model and other._core is not model._core  # a model of its own
+        assert other.n == model.n and list(other.dofs) == list(model.dofs) and other.name == model.name
+        np.testing.assert_array_equal(other.u0, model.u0)
+        assert getattr(other, "scene", None) == getattr(model, "scene", None)
+        res = nvib.solve(other, nvib.CEMDTS(), dt=1e-3, t_end=0.2)
+        np.testing.assert_array_equal(res.u, ref.u)
+        np.testing.assert_array_equal(res.v, ref.v)
+
+
+def test_a_lambda_force_says_why_it_does_not_pickle():
+    model = nvib.Model([1.0], force=lambda u, v, t: u)
+    with pytest.raises((pickle.PicklingError, AttributeError), match="lambda"):
+        pickle.dumps(model)
+
+
+def test_every_scheme_round_trips(scheme_class):
+    s = scheme_class()
+    for other in round_trips(s):
+        assert type(other) is type(s) and repr(other) == repr(s)
+
+
+def test_result_stats_and_failure_round_trip():
+    model = nvib.load_scene("building")
+    res = nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=0.05, save_every=3, dofs=["x2", "x5"], energy=True)
+    for other in round_trips(res):
+        for key in ("t", "u", "v", "a"):
+            np.testing.assert_array_equal(getattr(other, key), getattr(res, key))
+        np.testing.assert_array_equal(other.energy.balance_error, res.energy.balance_error)
+        assert other.dofs == res.dofs and other.dof_indices == res.dof_indices
+        assert other.stats.as_dict() == res.stats.as_dict() and other.stats.linear_solver == "dense LU"
+        assert other.status == res.status and other.failure is None
+        assert other.max_residual == res.max_residual and other.dt == res.dt and repr(other.scheme) == repr(res.scheme)
+
+    failed = nvib.solve(model, nvib.CentralDifference(), dt=0.05, t_end=5.0, throw=False)
+    assert failed.status == nvib.Status.diverged
+    for other in round_trips(failed):
+        f, g = other.failure, failed.failure
+        assert (f.status, f.step, f.t, f.dof, f.message, list(f.residuals)) == (g.status, g.step, g.t, g.dof, g.message,
+                                                                              list(g.residuals))
+    assert pickle.loads(pickle.dumps(failed.stats)).as_dict() == failed.stats.as_dict()
+
+
+def test_errors_keep_their_failure_result_and_argument(tmp_path):
+    with pytest.raises(nvib.DivergenceError) as exc:
+        nvib.solve(nvib.load_scene("building"), nvib.CentralDifference(), dt=0.05, t_end=5.0)
+    e = pickle.loads(pickle.dumps(exc.value))
+    assert type(e) is nvib.DivergenceError and str(e) == str(exc.value)
+    assert (e.step, e.dof, e.t) == (exc.value.step, exc.value.dof, exc.value.t)
+    np.testing.assert_array_equal(e.result.u, exc.value.result.u)
+
+    with pytest.raises(nvib.ArgumentError) as exc:
+        nvib.CEMDTS(eta=3.0)
+    e = pickle.loads(pickle.dumps(exc.value))
+    assert type(e) is nvib.ArgumentError and e.argument == "eta" and str(e) == str(exc.value)
+
+    with pytest.raises(nvib.RecordError) as exc:
+        nvib.GroundMotion.from_at2(tmp_path / "none.AT2")
+    e = pickle.loads(pickle.dumps(exc.value))
+    assert str(e) == str(exc.value) and e.path == exc.value.path and e.line is None
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[dofs]\nnames = [\"x\"]\n", encoding="utf-8")
+    with pytest.raises(nvib.SceneError) as exc:
+        nvib.load_scene(str(bad))
+    e = pickle.loads(pickle.dumps(exc.value))
+    assert type(e) is nvib.SceneError and str(e) == str(exc.value)
