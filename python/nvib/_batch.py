@@ -1,0 +1,288 @@
+"""Many runs in one call: ``solve_many``.
+
+The runs are a list of models, or one model under several ground motions and/or scale factors, or
+one model with parameter variations of named effects, with one scheme or one per run. Models of
+built-in effects run on threads (the solver releases the GIL, so they use every core); models that
+call Python run in processes (they pickle). Results come back in input order; a run that fails keeps
+its status and message in its own result and the others go on. ``keep="peaks"`` keeps a summary per
+run instead of its history, so memory stays bounded however many runs there are.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import dataclasses
+import itertools
+import math
+import os
+
+import numpy as np
+
+from . import _checks
+from ._labels import scheme_label
+from ._model import Model
+from ._progress import ProgressBar
+from ._records import GroundMotion
+from ._solve import Status, solve
+
+__all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
+
+
+@dataclasses.dataclass
+class RunSummary:
+    """What ``keep="peaks"`` keeps of a run: its status and message, the peak |u| of every DOF, the peak
+    |d| of every named effect's measure (a storey's drift), the final state, the largest relative energy
+    balance error (with ``energy=True``), the counters and the wall time. ``label`` says what the run was."""
+
+    label: dict
+    status: Status | None
+    message: str
+    peak_u: np.ndarray
+    peak_measures: dict
+    t_final: float
+    u_final: np.ndarray
+    v_final: np.ndarray
+    energy_error: float | None
+    stats: object
+    wall_time: float
+
+    @property
+    def success(self) -> bool:
+        return self.status == Status.success
+
+
+@dataclasses.dataclass
+class RunError:
+    """A run that could not be made (a bad parameter value, a model that does not build): the error."""
+
+    label: dict
+    error: BaseException
+
+    status = None
+    success = False
+
+    @property
+    def message(self) -> str:
+        return f"{type(self.error).__name__}: {self.error}"
+
+
+class Batch(list):
+    """The results of ``solve_many`` in input order (a Result or RunSummary per run, or a RunError),
+    with ``labels`` (what each run was: its index, ground motion, scale, varied parameters, scheme)."""
+
+    def __init__(self, results, labels):
+        super().__init__(results)
+        self.labels = list(labels)
+
+    @property
+    def failed(self) -> list[int]:
+        """Indices of the runs that did not succeed."""
+        return [k for k, r in enumerate(self) if not r.success]
+
+    def __reduce__(self):
+        return (Batch, (list(self), self.labels))
+
+
+# ---- the runs ---------------------------------------------------------------------------------------
+
+def _scaled_signal(signal, factor: float):
+    if factor == 1.0:
+        return signal
+    if isinstance(signal, GroundMotion):
+        return signal.scaled(factor)
+    if isinstance(signal, dict) and signal.get("kind") == "sine":
+        return {**signal, "amplitude": _checks.real("signal.amplitude", signal["amplitude"]) * factor}
+    if isinstance(signal, dict) and signal.get("kind") == "table":
+        return {**signal, "values": (np.asarray(signal["values"], dtype=float) * factor).tolist()}
+    if isinstance(signal, dict) and signal.get("kind") == "record":
+        return GroundMotion.from_spec("signal", signal).scaled(factor)
+    raise _checks.value_error("scales", f"cannot scale the signal {signal!r}")
+
+
+def _derived(model: Model, motion, scale: float, changes: dict) -> Model:
+    """The model with its ground accelerations' signal replaced by `motion` (if given) times `scale`,
+    and the named effects' parameters changed (`changes`: {"storey1.k0": value})."""
+    mass, kwargs = model._init
+    effects = kwargs.get("effects")
+    if effects is None:
+        raise _checks.value_error("model", "ground motions, scales and variations need a model of declared effects")
+    effects = [dict(e) if isinstance(e, dict) else e for e in effects]
+    ground = [e for e in effects if isinstance(e, dict) and e.get("type") == "ground_acceleration"]
+    if (motion is not None or scale != 1.0) and not ground:
+        raise _checks.value_error("ground_motions" if motion is not None else "scales",
+                                  "the model has no ground_acceleration effect")
+    for e in ground:
+        e["signal"] = _scaled_signal(motion if motion is not None else e.get("signal"), scale)
+    for key, value in changes.items():
+        name, param = key.rsplit(".", 1)
+        hits = [e for e in effects if isinstance(e, dict) and e.get("name") == name]
+        if not hits:
+            raise _checks.value_error(f"variations[{key!r}]", f"no effect named {name!r}")
+        for e in hits:
+            if param not in e:
+                raise _checks.value_error(f"variations[{key!r}]", f"effect {name!r} has no parameter {param!r}")
+            e[param] = value
+    out = Model(mass, **{**kwargs, "effects": effects})
+    state = {k: v for k, v in model.__dict__.items() if k not in ("_core", "_lookup", "_init")}
+    out.__dict__.update(state)
+    scene = getattr(model, "scene", None)
+    if isinstance(scene, dict) and scene.get("initial_u") == "static_equilibrium":
+        out.u0 = out.static_equilibrium()  # the changed model has its own equilibrium
+    return out
+
+
+def _expand(models, ground_motions, scales, variations):
+    """[(model or None, motion, scale, changes, label)] in input order."""
+    if isinstance(models, Model):
+        motions = [None] if ground_motions is None else list(ground_motions)
+        for k, g in enumerate(motions):
+            if g is not None and not isinstance(g, GroundMotion):
+                raise _checks.type_error(f"ground_motions[{k}]", f"expected a GroundMotion, got {type(g).__name__}")
+        factors = [1.0] if scales is None else [_checks.real(f"scales[{k}]", s) for k, s in enumerate(scales)]
+        if not motions or not factors:
+            raise _checks.value_error("ground_motions" if not motions else "scales", "empty")
+        variations = dict(variations or {})
+        declared = models._init[1].get("effects") or []
+        for key in variations:
+            name, _, param = str(key).rpartition(".")
+            hits = [e for e in declared if isinstance(e, dict) and e.get("name") == name]
+            if not name or not hits:
+                raise _checks.value_error(f"variations[{key!r}]", "expected 'effect_name.parameter' naming an effect "
+                                          f"of the model (named: {', '.join(sorted(str(e.get('name')) for e in declared if isinstance(e, dict) and e.get('name'))) or 'none'})")
+            if any(param not in e for e in hits):
+                raise _checks.value_error(f"variations[{key!r}]", f"effect {name!r} has no parameter {param!r}")
+            if isinstance(variations[key], (str, bytes)) or not hasattr(variations[key], "__len__"):
+                raise _checks.type_error(f"variations[{key!r}]", "expected a list of values, one per run")
+        lengths = {key: len(v) for key, v in variations.items()}
+        if len(set(lengths.values())) > 1:
+            raise _checks.value_error("variations", f"every parameter needs as many values (got {lengths})")
+        nvar = next(iter(lengths.values()), 1)
+        runs = []
+        for (gi, g), s, k in itertools.product(enumerate(motions), factors, range(nvar)):
+            changes = {key: values[k] for key, values in variations.items()}
+            label = {}
+            if ground_motions is not None:
+                label["ground_motion"] = g.name or gi
+            if scales is not None:
+                label["scale"] = s
+            label.update(changes)
+            runs.append((models, g, s, changes, label))
+        return runs
+    models = list(models)
+    for k, m in enumerate(models):
+        if not isinstance(m, Model):
+            raise _checks.type_error(f"models[{k}]", f"expected a Model, got {type(m).__name__}")
+    for arg, value in (("ground_motions", ground_motions), ("scales", scales), ("variations", variations)):
+        if value is not None:
+            raise _checks.value_error(arg, "applies to one model; with a list of models, make each model as wanted")
+    return [(m, None, 1.0, {}, {"model": m.name or k}) for k, m in enumerate(models)]
+
+
+def _summary(model: Model, res, label: dict) -> RunSummary:
+    u = res.u
+    peak_u = np.max(np.abs(u), axis=0) if len(u) else np.zeros(model.n)
+    measures = {}
+    for e in model.effects or []:
+        if e.name and not e.is_load:
+            d = u[:, list(e.index)] @ np.asarray(e.coef)
+            measures[e.name] = float(np.max(np.abs(d))) if d.size else 0.0
+    for arr in model.effect_arrays:
+        if arr.name and not arr.is_load:  # one peak per effect of the array: d_k = u[i_k] - u[j_k]
+            i, j = np.asarray(arr.i), np.asarray(arr.j)
+            uj = np.where(j >= 0, u[:, np.maximum(j, 0)], 0.0) if j.size else 0.0
+            measures[arr.name] = np.max(np.abs(u[:, i] - uj), axis=0) if len(u) else np.zeros(i.size)
+    err = float(res.energy.relative_balance_error()) if res.energy is not None else None
+    msg = res.failure.message if res.failure is not None else ""
+    return RunSummary(label, res.status, msg, peak_u, measures, float(res.t[-1]), u[-1].copy(), res.v[-1].copy(),
+                      err, res.stats, res.stats.wall_time)
+
+
+def _run_one(model, motion, scale, changes, label, scheme, keep, options):
+    """One run; never raises for the run's own failure (bad input gives a RunError)."""
+    try:
+        m = _derived(model, motion, scale, changes) if (motion is not None or scale != 1.0 or changes) else model
+        if keep == "peaks":
+            res = solve(m, scheme, throw=False, **{**options, "save_every": 1, "dofs": None})
+            return _summary(m, res, label)
+        return solve(m, scheme, throw=False, **options)
+    except (ValueError, TypeError, ArithmeticError, RuntimeError) as exc:
+        return RunError(label, exc)
+
+
+def _run_chunk(items, keep, options):
+    return [_run_one(*item, keep, options) for item in items]
+
+
+# ---- the call ----------------------------------------------------------------------------------------
+
+def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, scales=None, variations=None,
+               keep: str = "history", threads: int | None = None, processes: bool | None = None, client=None,
+               progress: bool = True, **options) -> Batch:
+    """Run many analyses and return their results in input order (a ``Batch``, a list).
+
+    ``models``: a list of Models, or one Model with ``ground_motions`` (GroundMotion records that replace
+    its ground accelerations' signal) and/or ``scales`` (factors on that signal: an IDA's intensity
+    levels; every motion at every scale) and/or ``variations`` ({"storey1.k0": [values...], ...}: run k
+    sets every listed parameter of the named effect to its k-th value; with motions and scales, every
+    combination). ``scheme``: one scheme, or a list of one per run. ``keep``: "history" (each run's
+    Result) or "peaks" (a RunSummary: memory stays bounded for 10^5 runs). ``threads``: worker threads
+    (default: every core); models that call Python go to as many processes instead (``processes=True``
+    forces processes). ``client``: a ``dask.distributed.Client`` to send chunks of runs to (the same
+    results as a local run). Other keywords go to ``solve()`` (``save_every``, ``dofs``, ``energy``, ...).
+    A failed run keeps its status and message in its own result (``Batch.failed`` lists them).
+    """
+    if keep not in ("history", "peaks"):
+        raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
+    runs = _expand(models, ground_motions, scales, variations)
+    schemes = list(scheme) if isinstance(scheme, (list, tuple)) else [scheme] * len(runs)
+    if len(schemes) != len(runs):
+        raise _checks.value_error("scheme", f"expected one scheme or {len(runs)} (one per run), got {len(schemes)}")
+    options = {**options, "dt": dt, "t_end": t_end}
+    labels = []
+    items = []
+    for (m, g, s, changes, label), sc in zip(runs, schemes):
+        label = {**label, "scheme": scheme_label(sc)}
+        labels.append(label)
+        items.append((m, g, s, changes, label, sc))
+    workers = max(1, int(threads) if threads is not None else (os.cpu_count() or 1))
+    uses_python = any(item[0]._core.has_python for item in items)
+    bar = ProgressBar(enabled=bool(progress))
+    results = [None] * len(items)
+    try:
+        if client is not None:
+            results = _on_dask(client, items, keep, options, bar)
+        elif workers == 1 and not processes:
+            for k, item in enumerate(items):
+                results[k] = _run_one(*item, keep, options)
+                bar(k + 1, len(items))
+        else:
+            use_processes = processes if processes is not None else uses_python
+            pool_type = cf.ProcessPoolExecutor if use_processes else cf.ThreadPoolExecutor
+            # chunks: a few per worker, so that the pool's per-task cost is spread and the load balances
+            size = max(1, math.ceil(len(items) / (4 * workers)))
+            chunks = [list(range(k, min(k + size, len(items)))) for k in range(0, len(items), size)]
+            done = 0
+            with pool_type(max_workers=workers) as pool:
+                futures = {pool.submit(_run_chunk, [items[k] for k in chunk], keep, options): chunk
+                           for chunk in chunks}
+                for fut in cf.as_completed(futures):
+                    for k, r in zip(futures[fut], fut.result()):
+                        results[k] = r
+                    done += len(futures[fut])
+                    bar(done, len(items))
+    finally:
+        bar.close()
+    return Batch(results, labels)
+
+
+def _on_dask(client, items, keep, options, bar):
+    """Chunks of runs as Dask tasks (their models pickled), gathered in input order."""
+    workers = max(1, len(client.scheduler_info().get("workers", {})) or 1)
+    size = max(1, math.ceil(len(items) / (4 * workers)))
+    chunks = [items[k:k + size] for k in range(0, len(items), size)]
+    futures = client.map(_run_chunk, chunks, keep=keep, options=options, pure=False)
+    out = []
+    for k, fut in enumerate(futures):
+        out.extend(fut.result())
+        bar(min((k + 1) * size, len(items)), len(items))
+    return out

@@ -1,0 +1,148 @@
+"""solve_many: every way of making runs gives the same results as the runs made one by one, in input
+order, on threads or processes; failures stay in their own result; summaries equal what the
+history says; a Dask cluster gives the same results (skipped without dask.distributed)."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+import nvib
+from nvib import GroundMotion
+
+
+def two_storeys(signal):
+    return nvib.Model([1e3, 1e3], dofs=["x1", "x2"], effects=[
+        {"type": "hardening_spring", "name": "storey1", "measure": {"x1": 1.0}, "k0": 4e5, "a": 50.0},
+        {"type": "hardening_spring", "name": "storey2", "measure": {"x2": 1.0, "x1": -1.0}, "k0": 3e5, "a": 50.0},
+        {"type": "damper", "name": "d1", "measure": {"x1": 1.0}, "c": 500.0},
+        {"type": "ground_acceleration", "name": "ground", "signal": signal}])
+
+
+def motions():
+    t = np.arange(400) * 0.005
+    return [GroundMotion.from_array(np.sin(5 * t) * np.exp(-t), dt=0.005, name="decay"),
+            GroundMotion.from_array(np.sign(np.sin(13 * t)), dt=0.005, name="square")]
+
+
+RUN = dict(dt=1e-3, t_end=2.5)
+
+
+def same(a, b):
+    for key in ("t", "u", "v", "a"):
+        np.testing.assert_array_equal(getattr(a, key), getattr(b, key))
+    assert a.status == b.status
+
+
+def test_motions_times_scales_equal_single_runs():
+    base = two_storeys({"kind": "sine", "amplitude": 1.0, "omega": 2.0})
+    scales = [0.5, 2.0, 4.0]
+    batch = nvib.solve_many(base, nvib.CEMDTS(), ground_motions=motions(), scales=scales, progress=False, **RUN)
+    assert len(batch) == 6 and not batch.failed
+    k = 0
+    for gm in motions():
+        for s in scales:
+            assert batch.labels[k] == {"ground_motion": gm.name, "scale": s, "scheme": "CEMDTS(0.45)"}
+            same(batch[k], nvib.solve(two_storeys(gm.scaled(s)), nvib.CEMDTS(), **RUN))
+            k += 1
+
+
+def test_scales_alone_scale_the_model_own_signal():
+    base = two_storeys({"kind": "sine", "amplitude": 1.0, "omega": 2.0})
+    batch = nvib.solve_many(base, nvib.Newmark(), scales=[3.0], progress=False, **RUN)
+    same(batch[0], nvib.solve(two_storeys({"kind": "sine", "amplitude": 3.0, "omega": 2.0}), nvib.Newmark(), **RUN))
+
+
+def test_variations_and_one_scheme_per_run():
+    base = two_storeys(motions()[0])
+    ks = [2e5, 4e5, 8e5]
+    schemes = [nvib.CentralDifference(), nvib.Zhai(), nvib.GeneralizedAlpha()]
+    batch = nvib.solve_many(base, schemes, variations={"storey1.k0": ks, "d1.c": [0.0, 100.0, 900.0]},
+                            progress=False, **RUN)
+    for k, (kk, c, sc) in enumerate(zip(ks, [0.0, 100.0, 900.0], schemes)):
+        m = two_storeys(motions()[0])
+        spec = m._init[1]["effects"]
+        spec[0]["k0"], spec[2]["c"] = kk, c
+        same(batch[k], nvib.solve(nvib.Model(m._init[0], **m._init[1]), sc, **RUN))
+        assert batch.labels[k]["storey1.k0"] == kk and batch.labels[k]["scheme"] == nvib.scheme_label(sc)
+
+
+def test_threads_match_one_thread_and_processes():
+    base = two_storeys(motions()[1])
+    kw = dict(scales=list(np.linspace(0.2, 3.0, 9)), progress=False, **RUN)
+    one = nvib.solve_many(base, nvib.CEMDTS(), threads=1, **kw)
+    for other in (nvib.solve_many(base, nvib.CEMDTS(), threads=2, **kw),
+                  nvib.solve_many(base, nvib.CEMDTS(), threads=2, processes=True, **kw)):
+        for a, b in zip(one, other):
+            same(a, b)
+
+
+def duffing(u, v, t):  # module level: a model calling Python goes to processes, which pickle it
+    return 4.0 * u + 0.2 * v + u ** 3 - np.cos(1.3 * t)
+
+
+def test_python_models_run_in_processes():
+    models = [nvib.Model([1.0], force=duffing, u0=[x]) for x in (0.0, 0.5, 1.0)]
+    batch = nvib.solve_many(models, nvib.CEMDTS(), threads=2, progress=False, dt=0.01, t_end=3.0)
+    for m, r in zip(models, batch):
+        same(r, nvib.solve(m, nvib.CEMDTS(), dt=0.01, t_end=3.0))
+    assert [lab["model"] for lab in batch.labels] == [0, 1, 2]
+
+
+def test_a_failed_run_keeps_its_status_and_the_others_go_on():
+    base = two_storeys(motions()[0])
+    batch = nvib.solve_many(base, nvib.CentralDifference(), variations={"storey1.k0": [4e5, 4e12, "soft"]},
+                            threads=2, progress=False, **RUN)
+    assert batch[0].success and batch.failed == [1, 2]
+    assert batch[1].status == nvib.Status.diverged and "diverged" in batch[1].failure.message
+    assert isinstance(batch[2], nvib.RunError) and "effects[0].k0" in batch[2].message
+    back = pickle.loads(pickle.dumps(batch))
+    assert back.labels == batch.labels and back.failed == batch.failed
+
+
+def test_peaks_summary_equals_the_history():
+    base = two_storeys(motions()[0])
+    hist = nvib.solve_many(base, nvib.CEMDTS(), scales=[1.0, 2.0], progress=False, energy=True, **RUN)
+    peaks = nvib.solve_many(base, nvib.CEMDTS(), scales=[1.0, 2.0], keep="peaks", progress=False, energy=True, **RUN)
+    for h, p in zip(hist, peaks):
+        assert isinstance(p, nvib.RunSummary) and p.success and p.label["scale"] in (1.0, 2.0)
+        np.testing.assert_array_equal(p.peak_u, np.max(np.abs(h.u), axis=0))
+        assert p.peak_measures["storey1"] == np.max(np.abs(h.u[:, 0]))
+        assert p.peak_measures["storey2"] == np.max(np.abs(h.u[:, 1] - h.u[:, 0]))
+        assert "ground" not in p.peak_measures  # a load has no measure worth a peak
+        np.testing.assert_array_equal(p.u_final, h.u[-1])
+        assert p.t_final == h.t[-1] and p.energy_error == h.energy.relative_balance_error() < 0.05
+
+
+def test_arguments_are_checked_and_named():
+    base = two_storeys(motions()[0])
+    cases = [(dict(keep="all"), "keep"), (dict(variations={"storey9.k0": [1.0]}), "variations['storey9.k0']"),
+             (dict(variations={"storey1.zz": [1.0]}), "variations['storey1.zz']"),
+             (dict(variations={"storey1.k0": [1.0], "d1.c": [1.0, 2.0]}), "variations")]
+    for kw, arg in cases:
+        with pytest.raises(nvib.ArgumentError) as exc:
+            nvib.solve_many(base, nvib.CEMDTS(), progress=False, **kw, **RUN)
+        assert exc.value.argument == arg
+    with pytest.raises(nvib.ArgumentError) as exc:
+        nvib.solve_many([base, base], nvib.CEMDTS(), scales=[2.0], **RUN)
+    assert exc.value.argument == "scales"
+    with pytest.raises(nvib.ArgumentError) as exc:
+        nvib.solve_many([base, base], [nvib.CEMDTS()] * 3, **RUN)
+    assert exc.value.argument == "scheme"
+    # a model without a ground acceleration cannot be scaled: that run's RunError says so
+    r = nvib.solve_many(nvib.Model([1.0], effects=[{"type": "spring", "measure": {0: 1.0}, "k": 1.0}]),
+                        nvib.CEMDTS(), scales=[2.0], threads=1, progress=False, **RUN)[0]
+    assert isinstance(r, nvib.RunError) and "no ground_acceleration effect" in r.message
+
+
+def test_dask_local_cluster_gives_the_same_results():
+    distributed = pytest.importorskip("dask.distributed")
+    base = two_storeys(motions()[0])
+    kw = dict(scales=[0.5, 1.0, 1.5, 2.0, 2.5], progress=False, **RUN)
+    local = nvib.solve_many(base, nvib.CEMDTS(), **kw)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = nvib.solve_many(base, nvib.CEMDTS(), client=client, **kw)
+    assert remote.labels == local.labels
+    for a, b in zip(local, remote):
+        same(a, b)
