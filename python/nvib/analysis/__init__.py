@@ -1,3 +1,3 @@
 """Tools on top of the integrator: closed-form solutions (exact), reference
 solutions (reference), accuracy against cost (cost) and stability analysis
-(stability)."""
+(stability), response spectra of ground-motion records (spectrum)."""

@@ -1,0 +1,92 @@
+"""Response spectra: the exact piecewise-linear SDOF solution against closed forms and an ODE solver,
+and nvib's spectra within the requested accuracy of it at every period."""
+
+import math
+
+import numpy as np
+import pytest
+
+import nvib
+from nvib.analysis.spectrum import exact_sdof_peaks
+
+
+def record(n=400, dt=0.01, seed=3):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * dt
+    a = np.convolve(rng.standard_normal(n), np.ones(4) / 4, "same") * np.exp(-((t - 1.5) / 1.0) ** 2) * 4.0
+    return nvib.GroundMotion.from_array(a, dt=dt, name="synthetic")
+
+
+def test_exact_solution_of_a_constant_ground_acceleration():
+    """a_g = a0 from t = 0: u = -(a0/w^2) (1 - e^{-z w t} (cos wd t + z/sqrt(1-z^2) sin wd t))."""
+    t = np.arange(2001) * 0.001
+    a0, z = 2.5, 0.07
+    for T in (0.05, 0.3, 1.7):
+        w = 2 * math.pi / T
+        wd = w * math.sqrt(1 - z * z)
+        u = -(a0 / w**2) * (1 - np.exp(-z * w * t) * (np.cos(wd * t) + z / math.sqrt(1 - z * z) * np.sin(wd * t)))
+        sd, _ = exact_sdof_peaks(t, np.full(t.size, a0), [T], z)
+        assert sd[0] == pytest.approx(np.max(np.abs(u)), rel=1e-11)
+
+
+def test_exact_solution_against_an_ode_solver_and_itself():
+    from scipy.integrate import solve_ivp
+
+    gm = record()
+    z = 0.05
+    for T in (0.08, 0.6):
+        w = 2 * math.pi / T
+        sol = solve_ivp(lambda t, y: [y[1], -2 * z * w * y[1] - w * w * y[0] - gm(t)], (0, gm.t[-1]), [0.0, 0.0],
+                        t_eval=gm.t, rtol=1e-11, atol=1e-14, max_step=0.002)
+        sd, sa = exact_sdof_peaks(gm.t, gm.a, [T], z)
+        assert sd[0] == pytest.approx(np.max(np.abs(sol.y[0])), rel=1e-7)
+        assert sa[0] == pytest.approx(np.max(np.abs(2 * z * w * sol.y[1] + w * w * sol.y[0])), rel=1e-7)
+    # evenly spaced samples take the filter path; times moved by 1e-7 of a step take the interval-by-interval
+    # one: the same samples at nearly the same times give the same peaks to about that much
+    t_uneven = gm.t + 1e-9 * np.sin(np.arange(gm.t.size))
+    t_uneven[0] = 0.0
+    for T in (0.2, 1.0):
+        np.testing.assert_allclose(exact_sdof_peaks(t_uneven, gm.a, [T], 0.02), exact_sdof_peaks(gm.t, gm.a, [T], 0.02),
+                                   rtol=1e-6)
+
+
+@pytest.mark.parametrize("accuracy", [1e-3, 1e-4])
+def test_elastic_spectrum_meets_the_requested_accuracy(accuracy):
+    gm = record()
+    periods = np.geomspace(0.05, 3.0, 25)
+    sp = nvib.spectrum(gm, periods, damping=0.05, accuracy=accuracy)
+    assert sp.check == "exact" and np.all(sp.error <= accuracy)
+    # independently: the exact peaks on the grid each period ran on
+    t_end = gm.t[-1] + 2 * periods.max()
+    for k in (0, 12, 24):
+        grid = np.arange(0.0, t_end + sp.dt[k] / 2, sp.dt[k])
+        sd, _ = exact_sdof_peaks(grid, gm(grid), [periods[k]], 0.05)
+        assert abs(sp.Sd[k] - sd[0]) <= accuracy * sd[0]
+    w = 2 * math.pi / periods
+    np.testing.assert_allclose(sp.PSv, w * sp.Sd, rtol=1e-15)
+    np.testing.assert_allclose(sp.PSa, w * w * sp.Sd, rtol=1e-15)
+    assert np.all(sp.dt <= gm.dt) and sp.wall_time > 0
+
+
+def test_inelastic_spectrum_checks_itself_by_step_halving():
+    gm = record()
+    periods = [0.1, 0.5, 1.5]
+    linear = nvib.spectrum(gm, periods, accuracy=1e-3)
+    # a hardening spring with a = 0 is the linear spring: the same spectrum, checked by halving instead
+    same = nvib.spectrum(gm, periods, accuracy=1e-3, law={"type": "hardening_spring", "a": 0.0})
+    assert same.check == "half step" and np.all(same.error <= 1e-3)
+    np.testing.assert_allclose(same.Sd, linear.Sd, rtol=3e-3)
+    stiff = nvib.spectrum(gm, periods, accuracy=1e-3, law={"type": "hardening_spring", "a": 5e4})
+    assert np.all(stiff.Sd < linear.Sd)  # hardening keeps the displacement smaller
+
+
+def test_arguments_named():
+    gm = record()
+    for kw, arg in ((dict(periods=[0.1, -1.0]), "periods"), (dict(periods=[0.1], damping=1.5), "damping"),
+                    (dict(periods=[0.1], accuracy=0.0), "accuracy")):
+        with pytest.raises(nvib.ArgumentError) as exc:
+            nvib.spectrum(gm, **kw)
+        assert exc.value.argument == arg
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.spectrum([0.0, 1.0], [0.1])
+    assert exc.value.argument == "record"
