@@ -32,6 +32,7 @@ from ._schemes import Newton, schemes
 from ._solve import Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
 from .analysis import exact, stability
 from .analysis.spectrum import Spectrum, spectrum
+from .analysis.ida import IDA, ida
 from . import scenes
 from .analysis.cost import cheapest, cost, cost_scipy, markdown_table, plot_work_precision, time_at_error
 from .analysis.reference import Reference, reference
@@ -43,7 +44,7 @@ __version__ = "0.1.0"
 __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
-    "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum",
+    "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "IDA", "ida",
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
