@@ -179,6 +179,13 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
 
 def _run(record, periods, dt, damping, law, scheme, t_end, threads):
     """[(Sd, absolute Sa, the run's times, wall time)] per period, through solve_many (one SDOF each)."""
+    out = []
+    for k in range(0, len(periods), 32):  # 32 histories at a time: memory stays bounded
+        out += _run_chunk(record, periods[k:k + 32], dt, damping, law, scheme, t_end, threads)
+    return out
+
+
+def _run_chunk(record, periods, dt, damping, law, scheme, t_end, threads):
     models = [_sdof(T, damping, record, law) for T in periods]
     batch = solve_many(models, scheme, dt=dt, t_end=t_end, keep="history", threads=threads, progress=False,
                        max_displacement=math.inf)
