@@ -90,3 +90,23 @@ def test_arguments_named():
     with pytest.raises(nvib.ArgumentTypeError) as exc:
         nvib.spectrum([0.0, 1.0], [0.1])
     assert exc.value.argument == "record"
+
+
+def test_command_line(tmp_path, capsys):
+    from nvib.cli import main
+
+    gm = record()
+    path = tmp_path / "rec.txt"
+    path.write_text("\n".join(repr(float(x)) for x in gm.a) + "\n", encoding="utf-8")
+    out = tmp_path / "sa.csv"
+    assert main(["spectrum", str(path), "--dt", "0.01", "--periods", "0.1,0.5,2", "--damping", "0.02", "0.05",
+                 "--out", str(out)]) == 0
+    lines = out.read_text(encoding="utf-8").splitlines()
+    assert lines[0].startswith("damping,period,Sd") and len(lines) == 1 + 2 * 3
+    sp = nvib.spectrum(gm, [0.1, 0.5, 2.0], damping=0.05)
+    assert float(lines[4].split(",")[2]) == sp.Sd[0]  # the CSV holds the library's numbers
+    for argv, arg in ((["spectrum", str(path)], "--dt"), (["spectrum", str(path), "--dt", "0.01", "--damping", "2"],
+                                                          "--damping")):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        assert exc.value.code == 2 and f"argument {arg}" in capsys.readouterr().err

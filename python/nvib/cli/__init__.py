@@ -6,6 +6,7 @@
     nvib demo                        hardening oscillator with every scheme against its closed form
     nvib stability [options]         spectral radius and stability limit of schemes on a linear SDOF
     nvib paper OUTDIR                the figures and tables of Yang et al. (2017), and CEMDTS's eta study
+    nvib spectrum RECORD [options]   response spectrum of a ground-motion record
 
 The schemes, their options and their labels come from the registry. Exit
 status: 0 success, 1 the run failed (diverged, Newton failed) or an output
@@ -17,7 +18,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import cost, demo, paper, run, scenes, stability
+from . import cost, demo, paper, run, scenes, spectrum, stability
 
 __all__ = ["build_parser", "main"]
 
@@ -30,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--cmake-dir", action="store_true", help="print the folder of nvibConfig.cmake and exit")
     parser.add_argument("--include-dir", action="store_true", help="print the folder of the C++ headers and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for command in (scenes, run, cost, paper, demo, stability):
+    for command in (scenes, run, cost, paper, demo, stability, spectrum):
         command.add_parser(sub)
     return parser
 

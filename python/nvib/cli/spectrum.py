@@ -1,0 +1,117 @@
+"""nvib spectrum: the response spectrum of a ground-motion record file."""
+
+from __future__ import annotations
+
+import argparse
+
+from . import _common as c
+
+
+def periods(text: str):
+    """FIRST:LAST:COUNT (log-spaced) or a comma-separated list of periods in seconds."""
+    import numpy as np
+
+    try:
+        if ":" in text:
+            first, last, count = text.split(":")
+            lo, hi, n = float(first), float(last), int(count)
+            if not (0 < lo < hi and n >= 2):
+                raise ValueError
+            return np.geomspace(lo, hi, n)
+        values = np.array([float(x) for x in text.split(",")])
+        if values.size == 0 or not np.all(values > 0):
+            raise ValueError
+        return values
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected FIRST:LAST:COUNT (0 < FIRST < LAST, COUNT >= 2, log-spaced) or "
+                                         f"a list T1,T2,... of positive periods in s, got {text!r}") from None
+
+
+def add_parser(sub) -> None:
+    from .. import schemes
+
+    keys = list(schemes())
+    p = sub.add_parser("spectrum", help="response spectrum of a ground-motion record",
+                       description="Response spectrum of a record (a PEER .AT2 file, or a text file of one column "
+                                   "with --dt or two columns t, a): Sd, pseudo-Sv, pseudo-Sa and the absolute Sa "
+                                   "for each period, with the accuracy reached against the exact solution.",
+                       epilog="example:\n  nvib spectrum elcentro.AT2 --scale 9.80665 --damping 0.05 "
+                              "--periods 0.05:5:200 --plot sa.png",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("record", help="the record file")
+    p.add_argument("--dt", type=c.positive_real, help="the sample step of a one-column file [s]")
+    p.add_argument("--scale", type=c.real, default=1.0, help="factor on the values (9.80665: g to m/s^2; default 1)")
+    p.add_argument("--damping", type=c.real, nargs="+", default=[0.05], help="damping ratios (default 0.05)")
+    p.add_argument("--periods", type=periods, default=periods("0.05:5:100"),
+                   help="FIRST:LAST:COUNT log-spaced, or T1,T2,... (default 0.05:5:100) [s]")
+    p.add_argument("--scheme", choices=keys, default="newmark", help="the scheme (default newmark)")
+    p.add_argument("--accuracy", type=c.positive_real, default=1e-3,
+                   help="relative accuracy of Sd to reach (default 1e-3)")
+    p.add_argument("--out", metavar="CSV", help="write the spectrum to this CSV file")
+    p.add_argument("--plot", metavar="PNG", help="write the spectra to this PNG")
+    p.set_defaults(func=lambda args, parser: c.run_checked(run, args, parser), subparser=p)
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from .. import GroundMotion, RecordError, spectrum
+
+    for z in args.damping:
+        if not 0.0 <= z < 1.0:
+            raise c.Usage("--damping", f"expected 0 <= damping < 1, got {z:g}")
+    if args.plot:
+        c.check_output("--plot", args.plot, c.PLOT_FORMATS)
+    if args.out:
+        c.check_output("--out", args.out, (".csv",))
+    try:
+        record = GroundMotion.from_file(args.record, dt=args.dt, scale=args.scale)
+    except RecordError as exc:
+        raise c.Usage("record", str(exc)) from None
+    except ValueError as exc:
+        raise c.usage_from(exc, {"dt": "--dt", "scale": "--scale"}, default="record") from None
+    scheme = c.make_scheme(args.scheme, args)
+    print(f"{record}")
+    results = []
+    for z in args.damping:
+        sp = spectrum(record, args.periods, damping=z, scheme=scheme, accuracy=args.accuracy)
+        results.append(sp)
+        print(f"damping {z:g}: {sp.periods.size} periods, {sp.scheme}, runs {c.seconds(sp.wall_time)}, "
+              f"max error of Sd {np.max(sp.error):.1e} against the {sp.check} check")
+        rows = [["T [s]", "Sd", "PSv", "PSa", "Sa", "error"]]
+        step = max(1, sp.periods.size // 10)
+        for k in range(0, sp.periods.size, step):
+            rows.append([f"{sp.periods[k]:.4g}", f"{sp.Sd[k]:.4g}", f"{sp.PSv[k]:.4g}", f"{sp.PSa[k]:.4g}",
+                         f"{sp.Sa[k]:.4g}", f"{sp.error[k]:.1e}"])
+        print("\n".join("  " + line for line in c.table(rows, right=set(range(6)))))
+    units = "m/s^2" if args.scale == 9.80665 else ("g" if record.units == "g" else "record units")
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as fh:
+            fh.write("damping,period,Sd,PSv,PSa,Sa,error,dt\n")
+            for sp in results:
+                for k in range(sp.periods.size):  # shortest round-trip decimals
+                    values = (sp.damping, sp.periods[k], sp.Sd[k], sp.PSv[k], sp.PSa[k], sp.Sa[k], sp.error[k], sp.dt[k])
+                    fh.write(",".join(repr(float(x)) for x in values) + "\n")
+        print(f"wrote {args.out}")
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
+        for sp in results:
+            line, = ax1.loglog(sp.periods, sp.PSa, label=f"PSa, ζ = {sp.damping:g}")
+            ax1.loglog(sp.periods, sp.Sa, ":", color=line.get_color(), label=f"Sa (absolute), ζ = {sp.damping:g}")
+            ax2.loglog(sp.periods, sp.Sd, color=line.get_color(), label=f"Sd, ζ = {sp.damping:g}")
+        ax1.set_ylabel(f"spectral acceleration [{units}]")
+        ax2.set_ylabel(f"spectral displacement [{units} s^2]" if units != "m/s^2" else "spectral displacement [m]")
+        for ax in (ax1, ax2):
+            ax.set_xlabel("period T [s]")
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        fig.suptitle(f"{record.name}: {results[0].scheme}, accuracy {args.accuracy:g}")
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=120)
+        print(f"wrote {args.plot}")
+    return 0
