@@ -151,7 +151,7 @@ def main() -> int:
     ap.add_argument("--out", default=os.path.join(HERE, "results", "batch.md"))
     args = ap.parse_args()
     sys.path.insert(0, HERE)
-    from building import machine_info
+    from building import machine_info, write_report
 
     load = os.getloadavg()[0]
     b = bench_batch(args.repeats)
@@ -202,10 +202,7 @@ def main() -> int:
     lines += ["", f"nvib for the same 10 periods: about {sub['wall']:.3f} s of runs (a twentieth of the 200), max error "
               f"{sub['max_error']:.2e}: the fastest SciPy method here ({fastest['method']}, error "
               f"{fastest['max_error']:.1e}) takes {fastest['wall'] / max(sub['wall'], 1e-9):.0f}x as long."]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    with open(args.out, "w", encoding="utf-8") as fh:
-        fh.write(text)
+    write_report(args.out, lines)
     return 0
 
 

@@ -192,6 +192,14 @@ def reference_cd(model, dt: float):
 
 
 # ---- report ----------------------------------------------------------------------------
+def write_report(path: str, lines: list[str]) -> None:
+    """Print a results page and write it to `path` (UTF-8)."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
 def cpu_name() -> str:
     """The CPU's model name (Linux), or "unknown"."""
     try:

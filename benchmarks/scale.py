@@ -137,7 +137,7 @@ def main() -> int:
 
     import numpy as np
 
-    from building import CXXFLAGS, machine_info
+    from building import CXXFLAGS, machine_info, write_report
 
     raw = os.path.splitext(args.out)[0] + ".json"
     if args.replot:
@@ -275,10 +275,7 @@ def main() -> int:
               f"ordering (nested dissection), with about "
               f"{max(r['bytes_per_dof'] for r in rows if r['model'] == 'lattice' and r['scheme'] == 'newmark' and r['n'] >= MEMORY_FROM):.0f} "
               "bytes per DOF for the factor."]
-    text = "\n".join(lines) + "\n"
-    print(text)
-    with open(args.out, "w", encoding="utf-8") as fh:
-        fh.write(text)
+    write_report(args.out, lines)
     return 0
 
 
