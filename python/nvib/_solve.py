@@ -12,10 +12,55 @@ from . import _checks, _core
 from ._core import Energy, Failure, Result, Stats, Status
 from ._errors import error_for
 from ._model import Model
+from ._records import GroundMotion
 
 __all__ = ["Energy", "Failure", "Result", "Stats", "Status", "Stepper", "default_max_displacement", "solve"]
 
 Result.__module__ = Energy.__module__ = Failure.__module__ = Stats.__module__ = "nvib"
+
+
+def _signal_values(signal, t: np.ndarray) -> np.ndarray:
+    """A signal of the effects (a GroundMotion or a sine/table dict) at the times t, as the solver sees it."""
+    if isinstance(signal, GroundMotion):
+        return signal(t)
+    if signal.get("kind") == "sine":
+        return float(signal["amplitude"]) * np.sin(float(signal["omega"]) * t + float(signal.get("phase", 0.0)))
+    if signal.get("kind") == "table":
+        return np.interp(t, np.asarray(signal["t"], float), np.asarray(signal["values"], float), left=0.0, right=0.0)
+    return GroundMotion.from_spec("signal", signal)(t)
+
+
+def _ground_of(model: Model, dofs) -> list | None:
+    """[(r on the saved DOFs, signal)] of the model's ground accelerations (single effects), or None."""
+    effects = model._init[1].get("effects") or []
+    out = []
+    for e in effects:
+        if not isinstance(e, dict) or e.get("type") != "ground_acceleration" or "i" in e:
+            continue
+        if e.get("name") in model.without or "ground_acceleration" in model.without:
+            continue
+        r = np.ones(model.n)
+        if "measure" in e:
+            r = np.zeros(model.n)
+            for key, c in e["measure"].items():
+                r[model._dof_index("measure", key)] += float(c)
+        out.append((r[np.asarray(dofs, dtype=int)], e.get("signal")))
+    return out or None
+
+
+def _absolute_a(self) -> np.ndarray:
+    """Absolute accelerations of the saved DOFs, a + r a_g(t) for each ground acceleration of the model
+    (its displacements, velocities and accelerations are relative to the ground); ``a`` itself when the
+    model has no ground motion."""
+    if self._ground is None:
+        return self.a
+    out = np.array(self.a, copy=True)
+    for r, signal in self._ground:
+        out += np.outer(_signal_values(signal, np.asarray(self.t)), r)
+    return out
+
+
+Result.absolute_a = property(_absolute_a)
 
 
 def _check_model(model):
@@ -158,6 +203,7 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
     res = _core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts)
+    res._ground = _ground_of(model, res.dof_indices)
     if throw and not res.success:
         raise error_for(res.failure, res)
     return res

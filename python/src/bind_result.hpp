@@ -23,6 +23,7 @@ struct PyResult {
   double dt = 0.0;
   py::object names = py::none();      // the model's DOF names (a list, or names made on demand)
   py::object dof_names = py::none();  // of the saved DOFs, made on first use
+  py::object ground = py::none();     // the ground motions under the model, for absolute accelerations (Python)
 
   // The names of the saved DOFs: the model's own sequence when all are saved in order (names made on
   // demand stay so), else a list.
@@ -135,14 +136,15 @@ inline void bind_result(py::module_& m) {
       })
       .def_readonly("scheme", &PyResult::scheme)
       .def_readonly("dt", &PyResult::dt)
+      .def_readwrite("_ground", &PyResult::ground, "[(influence on the saved DOFs, signal)] of the ground motions")
       .def(py::pickle(
           [](const PyResult& p) {
             const nvib::Result& r = p.r;
             return py::make_tuple(r.t, r.u, r.v, r.a, r.energy, r.dofs, r.stats, r.status, r.failure,
-                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names);
+                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.ground);
           },
           [](const py::tuple& x) {
-            if (x.size() != 14) raise_value_error("state", "not a pickled Result");
+            if (x.size() != 15) raise_value_error("state", "not a pickled Result");
             auto p = std::make_unique<PyResult>();
             nvib::Result& r = p->r;
             r.t = x[0].cast<nvib::Vector>();
@@ -159,6 +161,7 @@ inline void bind_result(py::module_& m) {
             p->scheme = x[11];
             p->dt = x[12].cast<double>();
             p->names = x[13];
+            p->ground = x[14];
             return p;
           }))
       .def("__repr__", [](const PyResult& p) {

@@ -108,3 +108,22 @@ def test_errors_keep_their_failure_result_and_argument(tmp_path):
         nvib.load_scene(str(bad))
     e = pickle.loads(pickle.dumps(exc.value))
     assert type(e) is nvib.SceneError and str(e) == str(exc.value)
+
+
+def test_batch_objects_round_trip():
+    import sys
+    import os
+
+    sys.path.insert(0, os.path.dirname(__file__))
+    from test_batch import motions, two_storeys
+
+    base = two_storeys(motions()[0])
+    summaries = nvib.solve_many(base, nvib.CEMDTS(), variations={"storey1.k0": [4e5, "soft"]}, keep="peaks", threads=1,
+                                progress=False,
+                                dt=1e-3, t_end=0.5)
+    spectrum = nvib.spectrum(motions()[0], [0.2, 1.0])
+    ida = nvib.ida(base, motions(), [1.0, 2.0], dt=1e-3, progress=False)
+    for obj in (summaries, summaries[0], summaries[1], spectrum, ida, nvib.Newton(rtol=1e-9, mode="modified")):
+        for other in round_trips(obj):
+            assert type(other) is type(obj)
+            assert pickle.dumps(other) == pickle.dumps(obj)  # the same state, byte for byte

@@ -201,3 +201,21 @@ def test_scene_with_a_bad_record_names_it(tmp_path):
     scene = write(tmp_path / "t.toml", SCENE.format(signal='{ kind = "record", file = "one.txt", dt = 0.01 }'))
     with pytest.raises(nvib.SceneError, match=r"one.txt, line 1: expected one column \(a\) or two"):
         nvib.load_scene(scene)
+
+
+def test_absolute_acceleration_of_a_free_mass_is_zero():
+    """A free mass moves with the ground: its relative acceleration is -a_g, its absolute one 0. With the
+    ground acting on one DOF only (a measure), the other DOF's absolute acceleration is its relative one."""
+    gm = GroundMotion.from_array(VALUES, dt=0.01, scale=9.80665)
+    res = nvib.solve(free_mass(gm), nvib.CentralDifference(), dt=0.004, t_end=0.12)
+    assert np.max(np.abs(res.a)) > 0.3  # the record moves it (pga 0.46 m/s², sampled every 4 ms)
+    np.testing.assert_allclose(res.absolute_a, 0.0, atol=1e-15 * gm.pga)
+    one = nvib.Model([2.0, 3.0], effects=[{"type": "ground_acceleration", "measure": {1: 1.0}, "signal": gm}])
+    res = nvib.solve(one, nvib.CEMDTS(), dt=0.004, t_end=0.12, dofs=[1, 0])
+    np.testing.assert_allclose(res.absolute_a[:, 0], 0.0, atol=1e-15 * gm.pga)
+    np.testing.assert_array_equal(res.absolute_a[:, 1], res.a[:, 1])
+    back = pickle.loads(pickle.dumps(res))
+    np.testing.assert_array_equal(back.absolute_a, res.absolute_a)
+    still = nvib.solve(nvib.Model([1.0], u0=[1.0], effects=[{"type": "spring", "measure": {0: 1.0}, "k": 1.0}]),
+                       nvib.CEMDTS(), dt=0.01, t_end=0.1)
+    assert still.absolute_a is still.a or np.array_equal(still.absolute_a, still.a)  # no ground: relative = absolute
