@@ -20,7 +20,7 @@ else:  # pragma: no cover
 
 SCENE_DIR = os.path.join(os.path.dirname(__file__), "scenes")
 _SCENE_KEYS = {"name", "title", "source", "t_end", "dt", "plot_dof"}
-_TOP_KEYS = {"scene", "dofs", "initial", "effect"}
+_TOP_KEYS = {"scene", "dofs", "initial", "effect", "damping"}
 
 
 class SceneError(ArgumentError):
@@ -104,6 +104,24 @@ def _with_records(path: str, i: int, effect):
     return {**effect, "signal": record}
 
 
+def _with_damping(path: str, model: Model, damping) -> Model:
+    """[damping] rayleigh = { zeta = 0.05, omegas = [w1, w2] } (or modes = [1, 3], or alpha/beta)."""
+    from ._damping import rayleigh
+
+    if not isinstance(damping, dict) or set(damping) != {"rayleigh"} or not isinstance(damping["rayleigh"], dict):
+        raise SceneError(f"{path}: [damping]: expected rayleigh = {{ zeta = ..., omegas = [...] }} (or modes = "
+                         "[i, j], or alpha = ..., beta = ...)", key="damping")
+    spec = damping["rayleigh"]
+    unknown = set(spec) - {"zeta", "omegas", "modes", "alpha", "beta"}
+    if unknown:
+        raise SceneError(f"{path}: [damping] rayleigh.{sorted(unknown)[0]}: unknown key (expected zeta, omegas, "
+                         "modes, alpha, beta)", key="damping")
+    try:
+        return rayleigh(model, **spec)
+    except (ValueError, TypeError) as exc:
+        raise SceneError(f"{path}: [damping] rayleigh.{exc}", key="damping") from None
+
+
 def _require(path: str, table: dict, key: str, where: str):
     if key not in table:
         raise SceneError(f"{path}: [{where}] {key}: missing")
@@ -182,6 +200,9 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
             model.u0 = model.static_equilibrium()
         except ArgumentError as exc:
             raise SceneError(f"{path}: {exc}", key="initial") from None
+    damping = data.get("damping")
+    if damping is not None:
+        model = _with_damping(path, model, damping)
     settings = {}
     for key in ("dt", "t_end"):
         if key in meta:
