@@ -28,6 +28,7 @@ from ._model import EFFECT_PARAMETERS, Model
 from ._records import STANDARD_GRAVITY, GroundMotion, RecordError
 from ._batch import Batch, RunError, RunSummary, solve_many
 from ._damping import rayleigh, rayleigh_coefficients
+from ._tables import load_result
 from ._scenes import SceneError, load_scene, scene_names
 from ._schemes import Newton, schemes
 from ._solve import Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
@@ -45,7 +46,7 @@ __version__ = "0.1.0"
 __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
-    "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "IDA", "ida", "rayleigh", "rayleigh_coefficients",
+    "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "IDA", "ida", "rayleigh", "rayleigh_coefficients", "load_result",
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",

@@ -17,7 +17,7 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
     .npz: t, u, v, a, dofs, status, scheme, dt, the stats counters, energy_* columns
     (if recorded), the failure message (if any) and the ``extra`` entries.
     .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...]``
-    and the values in full double precision."""
+    and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999)."""
     ext = os.path.splitext(str(path))[1].lower()
     if ext == ".npz":
         _write_npz(path, result, extra)
@@ -30,7 +30,8 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
 def _write_npz(path: str, result, extra: dict | None) -> None:
     data = {"t": result.t, "u": result.u, "v": result.v, "a": result.a, "dofs": np.array(result.dofs, dtype=str),
             "status": np.array(result.status.name), "scheme": np.array(repr(result.scheme)),
-            "dt": np.array(result.dt)}
+            "dt": np.array(result.dt), "num_steps_requested": np.array(result.num_steps_requested),
+            "max_residual": np.array(np.nan if result.max_residual is None else result.max_residual)}
     for k, val in result.stats.as_dict().items():
         data[k] = np.array(val)
     if result.energy is not None:
@@ -52,5 +53,7 @@ def _write_csv(path: str, result) -> None:
             cols.append(np.asarray(val)[:, None])
             head.append(f"energy:{k}")
     table = np.hstack(cols) if len(result.t) else np.zeros((0, len(head)))
-    with open(path, "w", encoding="utf-8", newline="") as fh:
-        np.savetxt(fh, table, fmt="%.17g", delimiter=",", header=",".join(head), comments="")
+    with open(path, "w", encoding="utf-8", newline="") as fh:  # shortest decimals that read back exactly
+        fh.write(",".join(head) + "\n")
+        for row in table.tolist():
+            fh.write(",".join(map(repr, row)) + "\n")

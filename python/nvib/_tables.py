@@ -1,0 +1,128 @@
+"""Results as tables and files: ``Result.to_pandas()``, ``Result.to_xarray()``, ``Result.save(path)``
+(.npz, .csv, .nc) and ``load_result(path)`` (.npz, .nc). pandas and xarray are optional extras."""
+
+from __future__ import annotations
+
+import importlib
+import math
+import os
+
+import numpy as np
+
+from . import _checks
+from ._core import Failure, Result, Stats, Status
+from ._io import save_result
+
+__all__ = ["load_result"]
+
+_ENERGY = ("kinetic", "potential", "work_in", "dissipated", "balance_error")
+_COUNTERS = ("num_steps", "num_force_evals", "num_fd_force_evals", "num_tangent_evals", "num_newton_iters",
+             "num_factorizations", "num_linear_solves", "num_expm")
+
+
+def _need(module: str, extra: str, what: str):
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise ImportError(f"{what} needs {module}, which is not installed: pip install \"nvib[{extra}]\"") from None
+
+
+def _attrs(res) -> dict:
+    """Scalars and strings describing the run (netCDF attributes take nothing else)."""
+    out = {"scheme": repr(res.scheme), "dt": float(res.dt), "status": res.status.name,
+           "num_steps_requested": int(res.num_steps_requested),
+           "max_residual": float("nan") if res.max_residual is None else float(res.max_residual),
+           "failure": res.failure.message if res.failure is not None else ""}
+    for k, v in res.stats.as_dict().items():
+        out[f"stats_{k}"] = v
+    return out
+
+
+def to_pandas(self):
+    """A DataFrame indexed by time ``t``, columns ``u:<dof>``, ``v:<dof>``, ``a:<dof>`` (and
+    ``energy:<term>`` if recorded); ``attrs`` holds the scheme, dt, status, failure and counters."""
+    pd = _need("pandas", "pandas", "Result.to_pandas()")
+    cols = {}
+    for q, arr in (("u", self.u), ("v", self.v), ("a", self.a)):
+        for j, d in enumerate(self.dofs):
+            cols[f"{q}:{d}"] = np.asarray(arr)[:, j]
+    if self.energy is not None:
+        for k, v in self.energy.as_dict().items():
+            cols[f"energy:{k}"] = np.asarray(v)
+    df = pd.DataFrame(cols, index=pd.Index(np.asarray(self.t), name="t"))
+    df.attrs.update(_attrs(self))
+    return df
+
+
+def to_xarray(self):
+    """A Dataset with u, v, a over (time, dof) (and the energy terms over time), the run in ``attrs``."""
+    xr = _need("xarray", "xarray", "Result.to_xarray()")
+    data = {q: (("time", "dof"), np.asarray(getattr(self, q))) for q in ("u", "v", "a")}
+    if self.energy is not None:
+        for k, v in self.energy.as_dict().items():
+            data[f"energy_{k}"] = (("time",), np.asarray(v))
+    ds = xr.Dataset(data, coords={"time": np.asarray(self.t), "dof": [str(d) for d in self.dofs]})
+    ds.attrs.update(_attrs(self))
+    return ds
+
+
+def save(self, path) -> None:
+    """Write the result by the extension of ``path``: .npz (everything), .csv (the histories as columns, in
+    shortest round-trip decimals) or .nc (netCDF, through xarray)."""
+    path = os.fspath(path)
+    if path.lower().endswith(".nc"):
+        to_xarray(self).to_netcdf(path, engine=_netcdf_engine())
+    else:
+        save_result(path, self)
+
+
+def _netcdf_engine() -> str:
+    try:
+        importlib.import_module("netCDF4")
+        return "netcdf4"
+    except ImportError:
+        return "scipy"  # netCDF 3, from SciPy
+
+
+def _rebuild(t, u, v, a, energy, dofs, attrs) -> Result:
+    stats = Stats.__new__(Stats)
+    stats.__setstate__(tuple(int(attrs.get(f"stats_{k}", 0)) for k in _COUNTERS) +
+                       (float(attrs.get("stats_wall_time", 0.0)), str(attrs.get("stats_linear_solver", ""))))
+    status = Status[str(attrs.get("status", "success"))]
+    failure = Failure.__new__(Failure)
+    failure.__setstate__((status, 0, math.nan, -1, [], str(attrs.get("failure", ""))))
+    res = Result.__new__(Result)
+    m = len(dofs)
+    res.__setstate__((np.asarray(t, float), np.asarray(u, float).reshape(-1, m), np.asarray(v, float).reshape(-1, m),
+                      np.asarray(a, float).reshape(-1, m), energy, list(range(m)), stats, status, failure,
+                      int(attrs.get("num_steps_requested", 0)), float(attrs.get("max_residual", math.nan)),
+                      str(attrs.get("scheme", "")), float(attrs.get("dt", 0.0)), [str(d) for d in dofs], None))
+    return res
+
+
+def load_result(path) -> Result:
+    """A Result read back from .npz or .nc (as ``Result.save`` writes them). Its ``scheme`` is the scheme's
+    repr; histories, DOF names, energy, status, failure message and counters are as saved."""
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext == ".npz":
+        with np.load(path, allow_pickle=False) as z:
+            keys = set(z.files)
+            energy = (np.column_stack([z[f"energy_{k}"] for k in _ENERGY]) if "energy_kinetic" in keys
+                      else np.zeros((0, 0)))
+            attrs = {k: z[k].item() for k in keys if z[k].ndim == 0}
+            attrs.update({f"stats_{k}": z[k].item() for k in (*_COUNTERS, "wall_time", "linear_solver") if k in keys})
+            return _rebuild(z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs)
+    if ext == ".nc":
+        xr = _need("xarray", "xarray", "load_result() of a .nc file")
+        with xr.open_dataset(path, engine=_netcdf_engine()) as ds:
+            energy = (np.column_stack([ds[f"energy_{k}"].values for k in _ENERGY]) if "energy_kinetic" in ds
+                      else np.zeros((0, 0)))
+            return _rebuild(ds["time"].values, ds["u"].values, ds["v"].values, ds["a"].values, energy,
+                            list(ds["dof"].values), dict(ds.attrs))
+    raise _checks.value_error("path", f"expected a file ending in .npz or .nc, got {path!r}")
+
+
+Result.to_pandas = to_pandas
+Result.to_xarray = to_xarray
+Result.save = save
