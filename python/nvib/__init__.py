@@ -65,7 +65,7 @@ def expm(A, squarings: int = 20):
     A = _checks.real_array("A", A)
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise _checks.value_error("A", f"expected a square matrix, got shape {A.shape}")
-    squarings = _checks.integer("squarings", squarings)
+    squarings = _checks.integer("squarings", squarings, maximum=None)
     if not 0 <= squarings <= 60:
         raise _checks.value_error("squarings", f"needs 0 <= squarings <= 60, got {squarings}")
     E = _core.expm(A, squarings)

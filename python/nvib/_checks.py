@@ -39,13 +39,24 @@ def real(name: str, x, *, positive: bool = False) -> float:
     return x
 
 
-def integer(name: str, x, *, minimum: int | None = None) -> int:
+def integer(name: str, x, *, minimum: int | None = None, maximum: int | None = 2**63 - 1) -> int:
+    """An integer (not a bool) in [minimum, maximum]; the default maximum is the C++ core's 64-bit limit
+    (None: no bound, for callers that check their own range)."""
     if isinstance(x, bool) or not isinstance(x, numbers.Integral):
         raise type_error(name, f"expected an integer, got {type(x).__name__}")
     x = int(x)
     if minimum is not None and x < minimum:
         raise value_error(name, f"must be >= {minimum}, got {x}")
+    if maximum is not None and x > maximum:
+        raise value_error(name, f"must be <= {maximum}, got {x}")
     return x
+
+
+def boolean(name: str, x) -> bool:
+    """True or False only (a string such as "False" is not read as a truth value)."""
+    if not isinstance(x, (bool, np.bool_)):
+        raise type_error(name, f"expected True or False, got {x!r}")
+    return bool(x)
 
 
 def real_array(name: str, x) -> np.ndarray:

@@ -201,8 +201,8 @@ class Model:
         elif self.without:
             raise _checks.value_error("without", "only a model of declared effects can leave effects out")
         # With Python in the loop (force or callable laws) the GIL is kept during runs.
-        self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, bool(uses_velocity), bool(uses_time), laws,
-                                 arrays)
+        self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, _checks.boolean("uses_velocity", uses_velocity),
+                                 _checks.boolean("uses_time", uses_time), laws, arrays)
 
     def __reduce__(self):
         """Pickled as its arguments and its attributes (u0, v0, scene, ...): the core is rebuilt on loading, so

@@ -119,6 +119,8 @@ def isatty(stream) -> bool:
 
 
 def check_output(arg: str, path: str, formats: tuple[str, ...]) -> None:
+    if not path:
+        raise Usage(arg, f"expected a file name ending in {' or '.join(formats)}, got an empty one")
     ext = os.path.splitext(path)[1].lower()
     if ext not in formats:
         raise Usage(arg, f"expected a file ending in {' or '.join(formats)}, got {path!r}")

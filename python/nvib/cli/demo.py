@@ -104,7 +104,7 @@ def add_parser(sub) -> None:
 def command(args) -> int:
     from . import _common as c
 
-    if args.plot:
+    if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     print("Hardening oscillator m x'' + k0 (1 + a x^2) x = 0 (Yang et al. 2017, section 4.2)")
     print(f"m = {M:g}, k0 = {K0:g}, a = {A:g}, x0 = {X0:g}, dt = {args.dt:g} s, "

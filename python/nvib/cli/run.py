@@ -91,9 +91,9 @@ def run(args) -> int:
     from .._io import FORMATS
     from .._progress import ProgressBar
 
-    if args.out:
+    if args.out is not None:
         c.check_output("--out", args.out, FORMATS)
-    if args.plot:
+    if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     scheme = c.make_scheme(args.scheme, args)
     model = load_model(args)

@@ -60,9 +60,9 @@ def run(args) -> int:
     for z in args.damping:
         if not 0.0 <= z < 1.0:
             raise c.Usage("--damping", f"expected 0 <= damping < 1, got {z:g}")
-    if args.plot:
+    if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
-    if args.out:
+    if args.out is not None:
         c.check_output("--out", args.out, (".csv",))
     try:
         record = GroundMotion.from_file(args.record, dt=args.dt, scale=args.scale)

@@ -63,7 +63,7 @@ def run(args) -> int:
         raise c.Usage("--omega-max", f"must be <= {hi:g}, got {args.omega_max:g}")
     if not lo <= args.omega_min < args.omega_max:
         raise c.Usage("--omega-min", f"must lie in [{lo:g}, --omega-max {args.omega_max:g}), got {args.omega_min:g}")
-    if args.plot:
+    if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     schemes = chosen_schemes(args)
     limit = max(stability.OMEGA_LIMIT, args.omega_max)

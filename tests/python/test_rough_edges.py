@@ -1,0 +1,31 @@
+"""Rough edges a new user meets: empty output names, huge save_every, truth values given as strings."""
+
+import subprocess
+import sys
+
+import pytest
+
+import nvib
+
+
+@pytest.mark.parametrize("argv, flag", [(["run", "hardening", "--out", ""], "--out"),
+                                        (["run", "hardening", "--plot", ""], "--plot"),
+                                        (["stability", "--plot", ""], "--plot")])
+def test_empty_output_names_are_refused(argv, flag, tmp_path):
+    p = subprocess.run([sys.executable, "-m", "nvib", *argv], capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 2 and f"argument {flag}: expected a file name" in p.stderr
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_save_every_beyond_64_bits_is_named():
+    with pytest.raises(nvib.ArgumentError) as exc:
+        nvib.solve(nvib.load_scene("hardening"), nvib.CEMDTS(), dt=1e-3, t_end=0.01, save_every=10**30)
+    assert exc.value.argument == "save_every" and "must be <=" in str(exc.value)
+
+
+@pytest.mark.parametrize("key", ["uses_velocity", "uses_time"])
+def test_flags_must_be_booleans(key):
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.Model([1.0], force=lambda u, v, t: u, **{key: "False"})
+    assert exc.value.argument == key
+    assert nvib.Model([1.0], force=lambda u, v, t: u, **{key: False}) is not None
