@@ -154,7 +154,11 @@ class Model:
         if isinstance(dofs, (str, bytes)) or not hasattr(dofs, "__iter__"):
             raise _checks.type_error("dofs", f"expected a list of {n} names, got {type(dofs).__name__}")
         if not isinstance(dofs, GeneratedNames):  # generated names are unique strings by construction
-            dofs = [str(d) for d in dofs]
+            dofs = list(dofs)
+            for k, d in enumerate(dofs):
+                if not isinstance(d, str):  # an integer in a measure means a DOF index, never a name
+                    raise _checks.type_error(f"dofs[{k}]", f"expected a name (a string), got {d!r}; integers in "
+                                                           "measures and dofs= already mean DOF indices")
             if len(set(dofs)) != len(dofs):
                 raise _checks.value_error("dofs", "names must be unique")
         if len(dofs) != n:

@@ -38,14 +38,20 @@ def scene_names() -> list[str]:
 
 
 def scene_path(name_or_path: str) -> str:
-    if os.path.sep in name_or_path or name_or_path.endswith(".toml") or os.path.exists(name_or_path):
+    """The file of a scene: a built-in name wins unless the argument looks like a path (contains a
+    folder separator or ends in .toml), so a file or folder named "building" in the working directory
+    does not shadow the built-in scene."""
+    looks_like_path = "/" in name_or_path or os.path.sep in name_or_path or name_or_path.endswith(".toml")
+    builtin = os.path.join(SCENE_DIR, name_or_path + ".toml")
+    if not looks_like_path and os.path.isfile(builtin):
+        return builtin
+    if looks_like_path or os.path.exists(name_or_path):
         if not os.path.isfile(name_or_path):
-            raise FileNotFoundError(f"scene: no such file {name_or_path!r}")
+            what = "is a folder, not a scene file" if os.path.isdir(name_or_path) else "no such file"
+            raise FileNotFoundError(f"scene: {name_or_path!r}: {what}")
         return name_or_path
-    path = os.path.join(SCENE_DIR, name_or_path + ".toml")
-    if not os.path.isfile(path):
-        raise _checks.value_error("scene", f"unknown scene {name_or_path!r} (built-in: {', '.join(scene_names())})")
-    return path
+    raise _checks.value_error("scene", f"unknown scene {name_or_path!r} (built-in: {', '.join(scene_names())}; a "
+                                       "scene file is named by a path such as ./my_scene.toml)")
 
 
 def load_scene(name_or_path: str, *, without=()) -> Model:

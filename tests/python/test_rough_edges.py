@@ -29,3 +29,23 @@ def test_flags_must_be_booleans(key):
         nvib.Model([1.0], force=lambda u, v, t: u, **{key: "False"})
     assert exc.value.argument == key
     assert nvib.Model([1.0], force=lambda u, v, t: u, **{key: False}) is not None
+
+
+def test_builtin_scene_names_win_over_files_in_the_working_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "building").mkdir()          # a folder named like a built-in scene
+    (tmp_path / "hardening").write_text("garbage", encoding="utf-8")
+    assert nvib.load_scene("building").scene["name"] == "building"
+    assert nvib.load_scene("hardening").scene["name"] == "hardening"
+    with pytest.raises(FileNotFoundError, match="is a folder, not a scene file"):
+        nvib.load_scene("./building")
+    (tmp_path / "mine.toml").write_text('[dofs]\nnames = ["x"]\nmass = [1.0]\n', encoding="utf-8")
+    assert nvib.load_scene("mine.toml").n == 1
+    with pytest.raises(nvib.ArgumentError, match="a scene file is named by a path"):
+        nvib.load_scene("nosuchscene")
+
+
+def test_dof_names_must_be_strings():
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.Model([1.0, 1.0], dofs=[1, 2], effects=[{"type": "spring", "measure": {1: 1.0}, "k": 1.0}])
+    assert exc.value.argument == "dofs[0]" and "DOF indices" in str(exc.value)
