@@ -155,32 +155,18 @@ class Model {
   }
 
   // out = K u + C v + f(u, v, t): everything on the left of M a + ... = 0.
-  void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) {
-    ++st.num_force_evals;
-    eval_f(u, v, t, out);
-    if (has_K_) out.noalias() += lin_->K * u;
-    if (has_C_) out.noalias() += lin_->C * v;
-  }
+  void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) { force_into(u, v, t, out, st); }
 
   // a = -M^{-1} (K u + C v + f(u, v, t))
   void acceleration(const CVecRef& u, const CVecRef& v, double t, VecRef a, Stats& st) {
-    force(u, v, t, a, st);
+    force_into(u, v, t, a, st);
     mass_.solve_negated_in_place(a);
   }
-
-  // The same on the steppers' own vectors: a force with eval() on pointers is called with their
-  // data, without the two Eigen::Ref temporaries (and their destructors) of the general form, which
-  // on a 6-DOF model cost as much as its mass solve.
+  // The same on the steppers' own vectors, without the two Eigen::Ref temporaries (and their
+  // destructors) of the general form, which on a 6-DOF model cost as much as its mass solve.
   void acceleration(const Vector& u, const Vector& v, double t, Vector& a, Stats& st) {
-    if constexpr (traits::has_pointer_eval<Force>::value) {
-      ++st.num_force_evals;
-      f_.eval(u.data(), v.data(), t, a.data());
-      if (has_K_) a.noalias() += lin_->K * u;
-      if (has_C_) a.noalias() += lin_->C * v;
-      mass_.solve_negated_in_place(a);
-    } else {
-      acceleration(CVecRef(u), CVecRef(v), t, VecRef(a), st);
-    }
+    force_into(u, v, t, a, st);
+    mass_.solve_negated_in_place(a);
   }
 
   // out_i = sum of |terms| of (K u + C v + f)_i: the scale of its round-off
@@ -258,6 +244,18 @@ class Model {
 
  private:
   void eval_f(const CVecRef& u, const CVecRef& v, double t, VecRef out) { f_(u, v, t, out); }
+
+  // force() on any contiguous vectors: a force with eval() on pointers gets their data.
+  template <class U, class W, class Out>
+  void force_into(const U& u, const W& v, double t, Out& out, Stats& st) {
+    ++st.num_force_evals;
+    if constexpr (traits::has_pointer_eval<Force>::value)
+      f_.eval(u.data(), v.data(), t, out.data());
+    else
+      f_(u, v, t, out);
+    if (has_K_) out.noalias() += lin_->K * u;
+    if (has_C_) out.noalias() += lin_->C * v;
+  }
 
   // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
   // a second-order difference); velocity columns only if f uses velocity.

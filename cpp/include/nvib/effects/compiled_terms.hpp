@@ -119,10 +119,10 @@ void add_dense_loads(const Arrays& a, const Group& g, double t, double* __restri
   }
 }
 
-// out += g^T f for every term of the group (or = for the first dense load).
+// out += g^T f for every term of the group (the dense loads: add_dense_loads).
 template <class L, Storage S>
 void add_forces(const Arrays& a, const Group& g, const double* u, const double* v, double t, double* out) {
-  if constexpr (S == dense_first && L::is_load) {
+  if constexpr (S == dense_first) {  // only loads are stored dense_first (CompiledEffects::compile)
     add_dense_loads<L>(a, g, t, out);
     return;
   }
@@ -140,18 +140,9 @@ void add_forces(const Arrays& a, const Group& g, const double* u, const double* 
         if (f == 0.0) continue;  // an open contact adds nothing
       out[c->i0] += a.coef[static_cast<size_t>(c->first)] * f;
       out[c->i1] += a.coef[static_cast<size_t>(c->first) + 1] * f;
-    } else if constexpr (S == dense || S == dense_first) {
+    } else if constexpr (S == dense) {
       const double* w = a.rows.data() + c->offset;
-      if (S == dense_first && g.writes && c == g.begin) {
-        if (a.no_constant_load) {  // one stream less: no constant vector to read
-          for (Index i = 0; i < a.n; ++i) out[i] = w[i] * f;
-        } else {
-          const double* base = a.f_const.data();
-          for (Index i = 0; i < a.n; ++i) out[i] = base[i] + w[i] * f;
-        }
-      } else {
-        for (Index i = 0; i < a.n; ++i) out[i] += w[i] * f;
-      }
+      for (Index i = 0; i < a.n; ++i) out[i] += w[i] * f;
     } else {
       const Index* idx = a.idx.data();
       const double* coef = a.coef.data();
