@@ -102,8 +102,7 @@ def _scaled_signal(signal, factor: float):
 def _derived(model: Model, motion, scale: float, changes: dict) -> Model:
     """The model with its ground accelerations' signal replaced by `motion` (if given) times `scale`,
     and the named effects' parameters changed (`changes`: {"storey1.k0": value})."""
-    mass, kwargs = model._init
-    effects = kwargs.get("effects")
+    effects = model._init[1].get("effects")
     if effects is None:
         raise _checks.value_error("model", "ground motions, scales and variations need a model of declared effects")
     effects = [dict(e) if isinstance(e, dict) else e for e in effects]
@@ -114,21 +113,27 @@ def _derived(model: Model, motion, scale: float, changes: dict) -> Model:
     for e in ground:
         e["signal"] = _scaled_signal(motion if motion is not None else e.get("signal"), scale)
     for key, value in changes.items():
-        name, param = key.rsplit(".", 1)
-        hits = [e for e in effects if isinstance(e, dict) and e.get("name") == name]
-        if not hits:
-            raise _checks.value_error(f"variations[{key!r}]", f"no effect named {name!r}")
+        hits, param = _named(effects, key)
         for e in hits:
-            if param not in e:
-                raise _checks.value_error(f"variations[{key!r}]", f"effect {name!r} has no parameter {param!r}")
             e[param] = value
-    out = Model(mass, **{**kwargs, "effects": effects})
-    state = {k: v for k, v in model.__dict__.items() if k not in ("_core", "_lookup", "_init")}
-    out.__dict__.update(state)
+    out = model._rebuilt(effects=effects)
     scene = getattr(model, "scene", None)
     if isinstance(scene, dict) and scene.get("initial_u") == "static_equilibrium":
         out.u0 = out.static_equilibrium()  # the changed model has its own equilibrium
     return out
+
+
+def _named(effects: list, key) -> tuple[list, str]:
+    """The declared effects (dicts) a variation key "effect_name.parameter" names, and the parameter."""
+    name, _, param = str(key).rpartition(".")
+    hits = [e for e in effects if isinstance(e, dict) and e.get("name") == name] if name else []
+    if not hits:
+        named = sorted(str(e.get("name")) for e in effects if isinstance(e, dict) and e.get("name"))
+        raise _checks.value_error(f"variations[{key!r}]", "expected 'effect_name.parameter' naming an effect of the "
+                                                          f"model (named: {', '.join(named) or 'none'})")
+    if any(param not in e for e in hits):
+        raise _checks.value_error(f"variations[{key!r}]", f"effect {name!r} has no parameter {param!r}")
+    return hits, param
 
 
 def _expand(models, ground_motions, scales, variations):
@@ -144,13 +149,7 @@ def _expand(models, ground_motions, scales, variations):
         variations = dict(variations or {})
         declared = models._init[1].get("effects") or []
         for key in variations:
-            name, _, param = str(key).rpartition(".")
-            hits = [e for e in declared if isinstance(e, dict) and e.get("name") == name]
-            if not name or not hits:
-                raise _checks.value_error(f"variations[{key!r}]", "expected 'effect_name.parameter' naming an effect "
-                                          f"of the model (named: {', '.join(sorted(str(e.get('name')) for e in declared if isinstance(e, dict) and e.get('name'))) or 'none'})")
-            if any(param not in e for e in hits):
-                raise _checks.value_error(f"variations[{key!r}]", f"effect {name!r} has no parameter {param!r}")
+            _named(declared, key)
             if isinstance(variations[key], (str, bytes)) or not hasattr(variations[key], "__len__"):
                 raise _checks.type_error(f"variations[{key!r}]", "expected a list of values, one per run")
         lengths = {key: len(v) for key, v in variations.items()}

@@ -84,12 +84,10 @@ def rayleigh(model: Model, *, zeta=None, omegas=None, modes=None, alpha: float |
     from scipy import sparse
 
     C_add = alpha * model.mass_sparse + beta * sparse.csc_matrix(K0)
-    mass, kwargs = model._init
-    C = kwargs.get("C")
+    C = model._init[1].get("C")
     if C is not None:
         C_add = C_add + (sparse.csc_matrix(C) if sparse.issparse(C) else sparse.csc_matrix(np.asarray(C, dtype=float)))
-    out = Model(mass, **{**kwargs, "C": C_add})
-    out.__dict__.update({k: v for k, v in model.__dict__.items() if k not in ("_core", "_lookup", "_init")})
+    out = model._rebuilt(C=C_add)
     out.rayleigh = {"alpha": alpha, "beta": beta, "omegas": None if w is None else [float(x) for x in w],
                     "zeta": zeta, "modes": modes}
     return out

@@ -211,8 +211,16 @@ class Model:
     def __reduce__(self):
         """Pickled as its arguments and its attributes (u0, v0, scene, ...): the core is rebuilt on loading, so
         a model goes to another process (a process pool, Dask) as long as its callables pickle."""
-        state = {k: v for k, v in self.__dict__.items() if k not in ("_core", "_lookup", "_init")}
-        return (_rebuild_model, (self._init, state))
+        return (_rebuild_model, (self._init, self._state()))
+
+    def _state(self) -> dict:
+        """Its attributes besides the core and what is made from the arguments (u0, v0, scene, ...)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_core", "_lookup", "_init")}
+
+    def _rebuilt(self, **changes) -> "Model":
+        """The model built again from its arguments with ``changes`` (effects=, C=, ...), its attributes kept."""
+        mass, kwargs = self._init
+        return _rebuild_model((mass, {**kwargs, **changes}), self._state())
 
     def _python_law(self, i: int, spec: dict):
         """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},
