@@ -194,7 +194,6 @@ def _run_chunk(record, periods, dt, damping, law, scheme, t_end, threads):
         if not res.success:
             why = res.message if isinstance(res, RunError) else res.failure.message
             raise RuntimeError(f"spectrum: the run at T = {T:g} s failed: {why}")
-        ag = record(res.t)
-        out.append((float(np.max(np.abs(res.u[:, 0]))), float(np.max(np.abs(res.a[:, 0] + ag))), res.t,
+        out.append((float(np.max(np.abs(res.u[:, 0]))), float(np.max(np.abs(res.absolute_a[:, 0]))), res.t,
                     res.stats.wall_time))
     return out
