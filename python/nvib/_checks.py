@@ -52,6 +52,22 @@ def integer(name: str, x, *, minimum: int | None = None, maximum: int | None = 2
     return x
 
 
+def samples(t_name: str, y_name: str, t, y, *, nonfinite: str) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times (1-D, at least two, strictly increasing) and as many values, all finite (a table
+    signal, a ground-motion record); ``nonfinite`` names the argument a NaN or Inf is blamed on."""
+    t = real_array(t_name, t)
+    y = real_array(y_name, y)
+    if t.ndim != 1 or t.size < 2:
+        raise value_error(t_name, "expected at least two sample times")
+    if y.shape != t.shape:
+        raise value_error(y_name, f"expected {t.size} values (as many as t), got shape {y.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise value_error(nonfinite, "the samples contain NaN or Inf")
+    if np.any(np.diff(t) <= 0):
+        raise value_error(t_name, "times must increase strictly")
+    return t, y
+
+
 def boolean(name: str, x) -> bool:
     """True or False only (a string such as "False" is not read as a truth value)."""
     if not isinstance(x, (bool, np.bool_)):

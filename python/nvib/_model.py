@@ -60,16 +60,7 @@ def _signal(where: str, spec) -> dict:
         out["omega"] = _checks.real(f"{where}.omega", spec["omega"])
         out["phase"] = _checks.real(f"{where}.phase", spec.get("phase", 0.0))
     else:
-        t = _checks.real_array(f"{where}.t", spec["t"])
-        y = _checks.real_array(f"{where}.values", spec["values"])
-        if t.ndim != 1 or t.size < 2:
-            raise _checks.value_error(f"{where}.t", "expected a list of at least two times")
-        if y.shape != t.shape:
-            raise _checks.value_error(f"{where}.values", f"expected {t.size} values (as many as t), got {y.size}")
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
-            raise _checks.value_error(where, "the table contains NaN or Inf")
-        if np.any(np.diff(t) <= 0):
-            raise _checks.value_error(f"{where}.t", "times must increase strictly")
+        t, y = _checks.samples(f"{where}.t", f"{where}.values", spec["t"], spec["values"], nonfinite=where)
         out["t"], out["values"] = t.tolist(), y.tolist()
     return out
 

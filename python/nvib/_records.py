@@ -68,16 +68,7 @@ class GroundMotion:
     scale = 9.80665 }`` with the path relative to the scene file."""
 
     def __init__(self, t, a, *, name: str = "", units: str = ""):
-        t = _checks.real_array("t", t)
-        a = _checks.real_array("a", a)
-        if t.ndim != 1 or t.size < 2:
-            raise _checks.value_error("t", "expected at least two sample times")
-        if a.shape != t.shape:
-            raise _checks.value_error("a", f"expected {t.size} values (as many as t), got shape {a.shape}")
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a))):
-            raise _checks.value_error("a", "the record contains NaN or Inf")
-        if np.any(np.diff(t) <= 0):
-            raise _checks.value_error("t", "sample times must increase strictly")
+        t, a = _checks.samples("t", "a", t, a, nonfinite="a")
         self.t = np.ascontiguousarray(t, dtype=float)
         self.a = np.ascontiguousarray(a, dtype=float)
         self.name = str(name)
