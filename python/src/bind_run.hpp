@@ -102,6 +102,9 @@ struct StepperImpl final : AnyStepper {
   void set_state(double t, const Vector& x) override { s.set_state(t, x); }
   nvib::Result integrate(double t_end, const SolveOptions& opt, py::object observer) override {
     PyObserver obs{std::move(observer), !python};
+    RunBound bound(std::isnan(opt.max_displacement)
+                       ? nvib::default_max_displacement(s.u(), s.v(), t_end - s.time())
+                       : opt.max_displacement);
     return interruptible(python, [&] { return nvib::integrate(s, t_end, opt, obs); });
   }
 
@@ -159,6 +162,8 @@ inline void bind_run(py::module_& m) {
         with_scheme(scheme, "scheme", [&](const auto& sc) {
           model.visit([&](auto& md) {
             PyObserver obs{progress, !model.python()};
+            RunBound bound(std::isnan(max_displacement) ? nvib::default_max_displacement(u0, v0, t_end - t0)
+                                                        : max_displacement);
             result->r = interruptible(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
           });
           return py::none();

@@ -77,6 +77,19 @@ inline double checked_scalar(const py::handle& obj, const std::string& who, doub
 }
 
 // All Python callables of a model: a vector force(u, v, t) and scalar laws on measures.
+// The divergence bound on |u_i| of the run in progress on this thread (NaN: none known, as in
+// Stepper.step); Python callbacks run on the thread of their run.
+inline thread_local double run_bound = std::numeric_limits<double>::quiet_NaN();
+constexpr double kOverflowScale = 1e30;
+
+struct RunBound {
+  double saved;
+  explicit RunBound(double bound) : saved(run_bound) { run_bound = bound; }
+  ~RunBound() { run_bound = saved; }
+  RunBound(const RunBound&) = delete;
+  RunBound& operator=(const RunBound&) = delete;
+};
+
 struct PyForce {
   py::object force = py::none();    // force(u, v, t) -> (n,) or None
   py::object tangent_ = py::none();  // tangent(u, v, t) -> (K, C)
@@ -102,13 +115,16 @@ struct PyForce {
       for (size_t k = 0; k < l.index.size(); ++k) out[l.index[k]] += l.coef[k] * f;
     }
   }
-  // Overflow of a diverging run is reported as divergence by the solver; a
-  // non-finite value at a moderate state is a bug in the callback.
+  // Overflow of a diverging run is reported as divergence by the solver: a
+  // state beyond the run's divergence bound (RunBound) or of size 1e30 or more
+  // is left to its divergence test, which stops the run with its partial
+  // history. A non-finite value at a moderate state is a bug in the callback.
   static void nonfinite(const CVecRef& u, const CVecRef& v, double t, const std::string& who) {
-    const double scale = std::max(u.cwiseAbs().maxCoeff(), v.cwiseAbs().maxCoeff());
-    if (u.allFinite() && v.allFinite() && scale < 1e30)
+    const double bound = std::isnan(run_bound) ? kOverflowScale : std::min(run_bound, kOverflowScale);
+    const double umax = u.cwiseAbs().maxCoeff(), vmax = v.cwiseAbs().maxCoeff();
+    if (u.allFinite() && v.allFinite() && umax <= bound && vmax < kOverflowScale)
       throw py::value_error(who + " returned a non-finite value at t = " + detail::fmt(t) +
-                            " for a finite state (max |u|, |v| = " + detail::fmt(scale) + ")");
+                            " for a finite state (max |u|, |v| = " + detail::fmt(std::max(umax, vmax)) + ")");
   }
   bool has_tangent() const {
     if (!force.is_none() && tangent_.is_none()) return false;

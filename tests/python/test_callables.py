@@ -272,6 +272,35 @@ def test_overflow_of_a_diverging_run_is_divergence_not_a_callback_error():
         nvib.solve(md, nvib.CentralDifference(), dt=0.03, t_end=100.0)
 
 
+def _overflowing_force(u, v, t):
+    """A stiffening law whose value overflows to inf near |u| = 3e7, far below 1e30 but beyond the bound."""
+    with np.errstate(over="ignore"):
+        return 100.0 * u + u ** 41
+
+
+@pytest.mark.parametrize("via", ["solve", "stepper"])
+def test_force_overflow_beyond_the_divergence_bound_is_divergence_with_partial_history(via):
+    """Past the run's divergence bound (1e10 here) an overflowing force is a divergence of the run, reported
+    with its step, time and DOF and the partial history, not a callback error that loses the history."""
+    md = nvib.Model([M], force=_overflowing_force, u0=[1.0], uses_velocity=False, uses_time=False)
+    if via == "solve":
+        res = nvib.solve(md, nvib.CentralDifference(), dt=0.3, t_end=10.0, throw=False)
+    else:
+        res = nvib.Stepper(md, nvib.CentralDifference(), 0.3).integrate(10.0, throw=False)
+    assert res.status == nvib.Status.diverged
+    assert res.failure.step == 2 and res.failure.t == pytest.approx(0.6) and res.failure.dof == 0
+    assert "beyond the bound 1e+10" in res.failure.message
+    np.testing.assert_array_equal(res.t, [0.0, 0.3])  # the states before the divergence are kept
+    assert np.all(np.isfinite(res.u))
+
+
+def test_force_overflow_within_a_raised_bound_is_a_callback_error():
+    """With the bound raised above the state where the law overflows, the same inf is a callback error."""
+    md = nvib.Model([M], force=_overflowing_force, u0=[1.0], uses_velocity=False, uses_time=False)
+    with pytest.raises(ValueError, match="force returned a non-finite value at t = 0.6"):
+        nvib.solve(md, nvib.CentralDifference(), dt=0.3, t_end=10.0, max_displacement=1e25)
+
+
 def test_callback_receives_fresh_arrays_and_time():
     seen = []
 
