@@ -31,7 +31,7 @@ from ._damping import rayleigh, rayleigh_coefficients
 from ._tables import load_result
 from ._scenes import SceneError, load_scene, scene_names
 from ._schemes import Newton, schemes
-from ._solve import Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
+from ._solve import ENERGY_WARNING, Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
 from .analysis import exact, stability
 from .analysis.spectrum import Spectrum, spectrum
 from .analysis.ida import IDA, ida
@@ -44,7 +44,7 @@ globals().update({cls.__name__: cls for cls in _schemes.scheme_classes()})
 __version__ = "0.1.0"
 
 __all__ = sorted([
-    "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError",
+    "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError", "ENERGY_WARNING",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
     "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "IDA", "ida", "rayleigh", "rayleigh_coefficients", "load_result",
     "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",

@@ -39,6 +39,10 @@ def _write_npz(path: str, result, extra: dict | None) -> None:
             data[f"energy_{k}"] = val
     if result.failure is not None:
         data["failure"] = np.array(result.failure.message)
+    data["units"] = np.array(result.units, dtype=str)
+    data["relative_to_ground"] = np.array(int(result.relative_to_ground))
+    if result.warnings:
+        data["warnings"] = np.array("\n".join(result.warnings))
     for k, val in (extra or {}).items():
         data[k] = np.array(val)
     with open(path, "wb") as fh:

@@ -88,6 +88,23 @@ def _effect_name(where: str, spec: dict) -> str:
     return name
 
 
+def _units(where: str, units, n: int):
+    """One unit string for every DOF, or a list of n (kept as one string when they are all the same)."""
+    if isinstance(units, str):
+        if not units.strip():
+            raise _checks.value_error(where, "expected a unit such as 'm' or 'rad', got an empty string")
+        return units
+    if not hasattr(units, "__iter__"):
+        raise _checks.type_error(where, f"expected a string or a list of {n} strings, got {type(units).__name__}")
+    units = list(units)
+    if len(units) != n:
+        raise _checks.value_error(where, f"expected {n} units (one per DOF), got {len(units)}")
+    for k, u in enumerate(units):
+        if not isinstance(u, str) or not u.strip():
+            raise _checks.type_error(f"{where}[{k}]", f"expected a unit such as 'm' or 'rad', got {u!r}")
+    return units[0] if len(set(units)) == 1 else units
+
+
 def _rebuild_model(init, state) -> "Model":
     mass, kwargs = init
     model = Model(mass, **kwargs)
@@ -120,15 +137,20 @@ class Model:
     u0, v0 : initial state (zeros by default).
     uses_velocity, uses_time : declare that ``force`` does not depend on v or t,
         so the schemes can skip what is not needed (a callable effect declares its own).
+    units : the unit of each DOF's displacement, one string for all or one per DOF (default "m").
+        nvib is unit-agnostic (any consistent set of units works); units only label plots and tables.
+        Velocities are in units/s, accelerations in units/s^2, times in s.
     """
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
-                 u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = ""):
+                 u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = "",
+                 units="m"):
         if effects is not None and not isinstance(effects, list):
             effects = list(effects)  # once: a generator is read here
         # The arguments, for pickling and copying (the core model is rebuilt from them).
         self._init = (mass, dict(K=K, C=C, force=force, tangent=tangent, effects=effects, dofs=dofs, u0=u0, v0=v0,
-                                 uses_velocity=uses_velocity, uses_time=uses_time, without=without, name=name))
+                                 uses_velocity=uses_velocity, uses_time=uses_time, without=without, name=name,
+                                 units=units))
         if _checks.is_sparse(mass):
             m = _checks.sparse_matrix("mass", mass)
         else:
@@ -156,6 +178,7 @@ class Model:
             raise _checks.value_error("dofs", f"expected {n} names, got {len(dofs)}")
         self.dofs = dofs
         self._lookup: dict | None = None
+        self._units = _units("units", units, n)
         Km = _checks.linear_part("K", K, n)
         Cm = _checks.linear_part("C", C, n)
         self.u0 = _checks.vector("u0", np.zeros(n) if u0 is None else u0, n)
@@ -350,6 +373,15 @@ class Model:
     def effect_arrays(self) -> list:
         """The effect arrays (``_core.EffectArray``), held by the core; made on each access."""
         return self._core.effect_arrays
+
+    @property
+    def units(self) -> list[str]:
+        """The unit of each DOF's displacement (velocities in units/s, accelerations in units/s^2)."""
+        return [self._units] * self.n if isinstance(self._units, str) else list(self._units)
+
+    def unit(self, dof) -> str:
+        """The unit of one DOF (a name or an index)."""
+        return self._units if isinstance(self._units, str) else self._units[self._dof_index("dof", dof)]
 
     @property
     def uses_velocity(self) -> bool:

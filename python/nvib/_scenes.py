@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _checks
 from ._core import ArgumentError
-from ._model import Model
+from ._model import Model, _units
 from ._records import GroundMotion
 
 if sys.version_info >= (3, 11):
@@ -21,6 +21,7 @@ else:  # pragma: no cover
 SCENE_DIR = os.path.join(os.path.dirname(__file__), "scenes")
 _SCENE_KEYS = {"name", "title", "source", "t_end", "dt", "plot_dof"}
 _TOP_KEYS = {"scene", "dofs", "initial", "effect", "damping"}
+MAX_SCENE_BYTES = 64 * 2**20  # a scene file larger than this is refused before it is read
 
 
 class SceneError(ArgumentError):
@@ -64,11 +65,7 @@ def load_scene(name_or_path: str, *, without=()) -> Model:
     full scene's equilibrium, and ``model.scene["notes"]`` says so.
     """
     path = scene_path(str(name_or_path))
-    try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: malformed TOML: {exc}") from None
+    data = _read_toml(path)
     without = (without,) if isinstance(without, str) else tuple(without)
     if not without:
         return scene_from_dict(data, path=path)
@@ -96,6 +93,44 @@ def load_scene(name_or_path: str, *, without=()) -> Model:
         notes.append("no effects left: the model is a free mass (u = u0 + v0 t)")
     model.scene["notes"] = notes
     return model
+
+
+def _read_toml(path: str) -> dict:
+    """The TOML table of a scene file; every error names the file. Files over MAX_SCENE_BYTES are refused
+    before they are read."""
+    size = None
+    try:
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_SCENE_BYTES:
+                raise SceneError(_too_large(path, size))
+            raw = fh.read(MAX_SCENE_BYTES + 1)  # the file may have grown since
+        if len(raw) > MAX_SCENE_BYTES:
+            raise SceneError(_too_large(path, len(raw)))
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            line = raw.count(b"\n", 0, exc.start) + 1
+            raise SceneError(f"{path}: not UTF-8 text: byte 0x{raw[exc.start]:02x} on line {line} (offset "
+                             f"{exc.start}); a TOML file is UTF-8") from None
+        del raw
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"{path}: malformed TOML: {exc}") from None
+    except RecursionError:
+        raise SceneError(f"{path}: malformed TOML: arrays or inline tables nested too deeply to read") from None
+    except MemoryError:
+        raise SceneError(f"{path}: too large to read into memory"
+                         + (f" ({_size_text(size)})" if size is not None else "")) from None
+
+
+def _size_text(size: int) -> str:
+    return f"{size / 2**20:.1f} MB" if size >= 2**20 else f"{size} bytes"
+
+
+def _too_large(path: str, size: int) -> str:
+    return (f"{path}: {_size_text(size)}, more than the {MAX_SCENE_BYTES // 2**20} MB a scene file may have "
+            "(a scene declares its model; large data such as a ground-motion record goes in a file of its own)")
 
 
 def _with_records(path: str, i: int, effect):
@@ -146,8 +181,8 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     names = _require(path, dofs, "names", "dofs")
     mass = _require(path, dofs, "mass", "dofs")
     for key in dofs:
-        if key not in ("names", "mass"):
-            raise SceneError(f"{path}: [dofs] {key}: unknown key (expected names, mass)")
+        if key not in ("names", "mass", "units"):
+            raise SceneError(f"{path}: [dofs] {key}: unknown key (expected names, mass, units)")
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         raise SceneError(f"{path}: [dofs] names: expected a list of strings")
     n = len(names)
@@ -197,8 +232,9 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
         raise SceneError(f"{path}: [initial] u: expected a list, a table DOF = value or \"static_equilibrium\", "
                          f"got {u_spec!r}")
     try:
+        units = _units("[dofs] units", dofs.get("units", "m"), n)
         model = Model(m, effects=effects, dofs=names, u0=None if static else state("u"), v0=state("v"),
-                      without=without, name=meta.get("name", os.path.basename(path)[:-5]))
+                      without=without, name=meta.get("name", os.path.basename(path)[:-5]), units=units)
     except (ValueError, TypeError) as exc:
         raise SceneError(f"{path}: {exc}") from None
     if static:
@@ -213,7 +249,7 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     for key in ("dt", "t_end"):
         if key in meta:
             try:
-                settings[key] = _checks.real(key, meta[key], positive=key == "dt")
+                settings[key] = _checks.real(key, meta[key], positive=True)  # scenes start at t = 0
             except (TypeError, ValueError) as exc:
                 raise SceneError(f"{path}: [scene] {exc}") from None
     model.scene = {

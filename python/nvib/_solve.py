@@ -14,7 +14,8 @@ from ._errors import error_for
 from ._model import Model
 from ._records import GroundMotion
 
-__all__ = ["Energy", "Failure", "Result", "Stats", "Status", "Stepper", "default_max_displacement", "solve"]
+__all__ = ["ENERGY_WARNING", "Energy", "Failure", "Result", "Stats", "Status", "Stepper", "default_max_displacement",
+           "solve"]
 
 Result.__module__ = Energy.__module__ = Failure.__module__ = Stats.__module__ = "nvib"
 
@@ -48,6 +49,50 @@ def _ground_of(model: Model, dofs) -> list | None:
     return out or None
 
 
+ENERGY_WARNING = 0.05
+"""A run that records its energy and ends with a relative energy balance error above this (5 %) gets an
+entry in ``Result.warnings``: its history is not to be trusted even though it did not diverge."""
+
+
+def _extras(self) -> dict:
+    return self._extras if isinstance(self._extras, dict) else {}
+
+
+def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
+    """What the Python layer knows about a run beside its history: the ground motions under the model
+    (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings."""
+    idx = np.asarray(res.dof_indices, dtype=int)
+    units = model._units if isinstance(model._units, str) else [model._units[k] for k in idx]
+    warnings = []
+    if res.energy is not None and len(res.t) > 1:
+        with np.errstate(all="ignore"):
+            rel = res.energy.relative_balance_error()
+        if np.isfinite(rel) and rel > warn_energy_error:
+            warnings.append(f"the energy balance error reached {rel:.1%} of the energy scale (above "
+                            f"{warn_energy_error:.0%}): this history is inaccurate; try a smaller dt")
+    ground = _ground_of(model, idx)
+    res._extras = {"ground": ground, "relative_to_ground": ground is not None, "units": units, "warnings": warnings}
+    return res
+
+
+def _unit_list(units, n: int) -> list[str]:
+    return [units] * n if isinstance(units, str) else list(units)
+
+
+Result._ground = property(lambda self: _extras(self).get("ground"))
+Result.relative_to_ground = property(
+    lambda self: bool(_extras(self).get("relative_to_ground", False)),
+    doc="True when the model moves on a shaking ground: u, v and a are then relative to the ground "
+        "(``absolute_a`` adds the ground's acceleration back)")
+Result.units = property(
+    lambda self: _unit_list(_extras(self).get("units", "m"), len(self.dofs)),
+    doc="the unit of each saved DOF's displacement (the model's ``units``; time is in s)")
+Result.warnings = property(
+    lambda self: list(_extras(self).get("warnings", ())),
+    doc="what a run that did not fail still wants said, e.g. an energy balance error above "
+        "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
+
+
 def _absolute_a(self) -> np.ndarray:
     """Absolute accelerations of the saved DOFs, a + r a_g(t) for each ground acceleration of the model
     (its displacements, velocities and accelerations are relative to the ground); ``a`` itself when the
@@ -61,6 +106,10 @@ def _absolute_a(self) -> np.ndarray:
 
 
 Result.absolute_a = property(_absolute_a)
+
+
+def _warning_level(value) -> float:
+    return _checks.real("warn_energy_error", value, positive=True) if value != math.inf else math.inf
 
 
 def _check_model(model):
@@ -147,11 +196,11 @@ class Stepper:
 
     def integrate(self, t_end: float, *, save_every: int = 1, dofs=None, throw: bool = True,
                   max_displacement: float | None = None, progress=None, energy: bool = False,
-                  max_energy_error: float | None = None) -> Result:
+                  max_energy_error: float | None = None, warn_energy_error: float = ENERGY_WARNING) -> Result:
         """Continue to t_end and return the saved history of this stretch (options as in ``solve``)."""
         t_end = _checks.real("t_end", t_end)
         opts = _run_options(self.model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
-        res = self._st.integrate(t_end, **opts)
+        res = _annotate(self._st.integrate(t_end, **opts), self.model, _warning_level(warn_energy_error))
         if throw and not res.success:
             raise error_for(res.failure, res)
         return res
@@ -171,7 +220,8 @@ def default_max_displacement(u, v, duration: float) -> float:
 
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
           save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
-          progress=None, energy: bool = False, max_energy_error: float | None = None) -> Result:
+          progress=None, energy: bool = False, max_energy_error: float | None = None,
+          warn_energy_error: float = ENERGY_WARNING) -> Result:
     """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. A
@@ -193,7 +243,14 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     |dissipated| so far) stops as diverged. That catches an instability that
     stays finite, such as a vehicle launched off its rails, which no
     displacement bound sees; a sound run's balance error is orders of
-    magnitude smaller. ``math.inf`` turns it off.
+    magnitude smaller. ``math.inf`` turns it off. A run that completes with a
+    relative balance error above ``warn_energy_error`` (default 5 %) is
+    not stopped, but ``Result.warnings`` says so.
+
+    nvib is unit-agnostic: any consistent set of units works. The built-in
+    scenes use SI (m, kg, s, N, rad); ``Model.units`` only labels plots and
+    tables. Under a ground acceleration u, v and a are relative to the ground
+    (``Result.relative_to_ground``; ``Result.absolute_a`` adds it back).
     """
     _check_model(model)
     dt = _checks.real("dt", dt, positive=True)
@@ -202,8 +259,8 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
-    res = _core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts)
-    res._ground = _ground_of(model, res.dof_indices)
+    warn = _warning_level(warn_energy_error)
+    res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
     if throw and not res.success:
         raise error_for(res.failure, res)
     return res

@@ -32,7 +32,8 @@ def _attrs(res) -> dict:
     out = {"scheme": repr(res.scheme), "dt": float(res.dt), "status": res.status.name,
            "num_steps_requested": int(res.num_steps_requested),
            "max_residual": float("nan") if res.max_residual is None else float(res.max_residual),
-           "failure": res.failure.message if res.failure is not None else ""}
+           "failure": res.failure.message if res.failure is not None else "",
+           "relative_to_ground": int(res.relative_to_ground), "warnings": "\n".join(res.warnings)}
     for k, v in res.stats.as_dict().items():
         out[f"stats_{k}"] = v
     return out
@@ -51,7 +52,14 @@ def to_pandas(self):
             cols[f"energy:{k}"] = np.asarray(v)
     df = pd.DataFrame(cols, index=pd.Index(np.asarray(self.t), name="t"))
     df.attrs.update(_attrs(self))
+    df.attrs["units"] = {"t": "s", **{f"{q}:{d}": _rate_unit(u, p) for q, p in (("u", 0), ("v", 1), ("a", 2))
+                                      for d, u in zip(self.dofs, self.units)}}
     return df
+
+
+def _rate_unit(unit: str, power: int) -> str:
+    """The unit of a displacement, velocity or acceleration of a DOF in ``unit``."""
+    return unit if power == 0 else f"{unit}/s" if power == 1 else f"{unit}/s^2"
 
 
 def to_xarray(self):
@@ -61,7 +69,11 @@ def to_xarray(self):
     if self.energy is not None:
         for k, v in self.energy.as_dict().items():
             data[f"energy_{k}"] = (("time",), np.asarray(v))
-    ds = xr.Dataset(data, coords={"time": np.asarray(self.t), "dof": [str(d) for d in self.dofs]})
+    ds = xr.Dataset(data, coords={"time": np.asarray(self.t), "dof": [str(d) for d in self.dofs],
+                                  "unit": ("dof", [str(u) for u in self.units])})
+    ds["time"].attrs["units"] = "s"
+    for q, p in (("u", 0), ("v", 1), ("a", 2)):  # per DOF in the unit coordinate; here the rate
+        ds[q].attrs["units"] = _rate_unit("unit", p)
     ds.attrs.update(_attrs(self))
     return ds
 
@@ -84,7 +96,7 @@ def _netcdf_engine() -> str:
         return "scipy"  # netCDF 3, from SciPy
 
 
-def _rebuild(t, u, v, a, energy, dofs, attrs) -> Result:
+def _rebuild(t, u, v, a, energy, dofs, attrs, units) -> Result:
     stats = Stats.__new__(Stats)
     stats.__setstate__(tuple(int(attrs.get(f"stats_{k}", 0)) for k in _COUNTERS) +
                        (float(attrs.get("stats_wall_time", 0.0)), str(attrs.get("stats_linear_solver", ""))))
@@ -97,6 +109,10 @@ def _rebuild(t, u, v, a, energy, dofs, attrs) -> Result:
                       np.asarray(a, float).reshape(-1, m), energy, list(range(m)), stats, status, failure,
                       int(attrs.get("num_steps_requested", 0)), float(attrs.get("max_residual", math.nan)),
                       str(attrs.get("scheme", "")), float(attrs.get("dt", 0.0)), [str(d) for d in dofs], None))
+    warnings = str(attrs.get("warnings", ""))
+    res._extras = {"ground": None, "relative_to_ground": bool(int(attrs.get("relative_to_ground", 0))),
+                   "units": [str(u) for u in units] if units is not None else "m",
+                   "warnings": warnings.split("\n") if warnings else []}
     return res
 
 
@@ -112,14 +128,16 @@ def load_result(path) -> Result:
                       else np.zeros((0, 0)))
             attrs = {k: z[k].item() for k in keys if z[k].ndim == 0}
             attrs.update({f"stats_{k}": z[k].item() for k in (*_COUNTERS, "wall_time", "linear_solver") if k in keys})
-            return _rebuild(z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs)
+            return _rebuild(z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs,
+                            list(z["units"]) if "units" in keys else None)
     if ext == ".nc":
         xr = _need("xarray", "xarray", "load_result() of a .nc file")
         with xr.open_dataset(path, engine=_netcdf_engine()) as ds:
             energy = (np.column_stack([ds[f"energy_{k}"].values for k in _ENERGY]) if "energy_kinetic" in ds
                       else np.zeros((0, 0)))
             return _rebuild(ds["time"].values, ds["u"].values, ds["v"].values, ds["a"].values, energy,
-                            list(ds["dof"].values), dict(ds.attrs))
+                            list(ds["dof"].values), dict(ds.attrs),
+                            list(ds["unit"].values) if "unit" in ds.coords else None)
     raise _checks.value_error("path", f"expected a file ending in .npz or .nc, got {path!r}")
 
 

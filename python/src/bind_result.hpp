@@ -23,7 +23,7 @@ struct PyResult {
   double dt = 0.0;
   py::object names = py::none();      // the model's DOF names (a list, or names made on demand)
   py::object dof_names = py::none();  // of the saved DOFs, made on first use
-  py::object ground = py::none();     // the ground motions under the model, for absolute accelerations (Python)
+  py::object extras = py::none();     // what the Python layer adds (ground motions, units, warnings): a dict
 
   // The names of the saved DOFs: the model's own sequence when all are saved in order (names made on
   // demand stay so), else a list.
@@ -136,12 +136,12 @@ inline void bind_result(py::module_& m) {
       })
       .def_readonly("scheme", &PyResult::scheme)
       .def_readonly("dt", &PyResult::dt)
-      .def_readwrite("_ground", &PyResult::ground, "[(influence on the saved DOFs, signal)] of the ground motions")
+      .def_readwrite("_extras", &PyResult::extras, "what the Python layer adds: a dict (ground, units, warnings)")
       .def(py::pickle(
           [](const PyResult& p) {
             const nvib::Result& r = p.r;
             return py::make_tuple(r.t, r.u, r.v, r.a, r.energy, r.dofs, r.stats, r.status, r.failure,
-                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.ground);
+                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.extras);
           },
           [](const py::tuple& x) {
             if (x.size() != 15) raise_value_error("state", "not a pickled Result");
@@ -161,7 +161,7 @@ inline void bind_result(py::module_& m) {
             p->scheme = x[11];
             p->dt = x[12].cast<double>();
             p->names = x[13];
-            p->ground = x[14];
+            p->extras = x[14];
             return p;
           }))
       .def("__repr__", [](const PyResult& p) {

@@ -149,7 +149,7 @@ def test_without_gravity_leaves_the_pendulum_a_free_mass(capsys):
     code, out, err = run_cli(capsys, "run", "pendulum", "--without", "gravity")
     assert code == 0, err
     assert "no effects left" in err
-    assert f"u = {model.u0[0]:.9g}, v = 0," in summary(out)["final theta"]  # v0 = 0: it stays put
+    assert f"u = {model.u0[0]:.9g} rad, v = 0 rad/s," in summary(out)["final theta"]  # v0 = 0: it stays put
 
 
 def test_free_particle_scene_file(capsys, tmp_path):

@@ -16,7 +16,8 @@ RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "ma
 
 EPILOG = """\
 Scheme parameters accept fractions (--eta 1/12). Exit status: 0 success, 1 the run failed
-(diverged, Newton failed; partial --out/--plot still written), 2 bad input.
+(diverged, Newton failed; partial --out/--plot still written), 2 bad input, 130 interrupted
+(Ctrl-C; --out holds the partial history when the core hands it over, and stderr says which).
 
 examples:
   nvib run hardening --scheme newmark --plot hardening.png
@@ -85,9 +86,7 @@ def load_model(args):
 
 
 def run(args) -> int:
-    import numpy as np
-
-    from .. import _core, save_result, solve
+    from .. import _core, solve
     from .._io import FORMATS
     from .._progress import ProgressBar
 
@@ -109,7 +108,7 @@ def run(args) -> int:
     try:
         n_steps = _core.steps_to_reach(0.0, t_end, dt)
     except (ValueError, OverflowError) as exc:
-        raise c.usage_from(exc, RUN_FLAGS, default="--dt") from None
+        raise step_error(exc, args, model) from None
     save_every = args.save_every if args.save_every is not None else max(1, math.ceil(n_steps / MAX_SAVED))
 
     for note in model.scene["notes"]:
@@ -121,9 +120,18 @@ def run(args) -> int:
         res = solve(model, scheme, dt=dt, t_end=t_end, save_every=save_every, throw=False,
                     max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy,
                     max_energy_error=args.max_energy_error)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         bar.close(done=False)
-        print("nvib run: interrupted", file=sys.stderr)
+        res = getattr(exc, "result", None)  # the partial history, when the core hands it over
+        if not args.out:
+            note = ""
+        elif res is None:
+            note = f"; the partial history is lost with the interrupt, {args.out} not written"
+        elif write_out(res, model, t_end, save_every, args):
+            note = f"; the partial history{reached(res, ' up to')} is in {args.out}"
+        else:
+            note = ""  # write_out said why
+        print(f"nvib run: interrupted{note}", file=sys.stderr)
         return 130
     except (ValueError, TypeError) as exc:
         bar.close(done=False)
@@ -133,14 +141,8 @@ def run(args) -> int:
 
     print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
     code = 0
-    if args.out:
-        try:
-            save_result(args.out, res, {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
-                                        "without": np.array(list(args.without or []), dtype=str)})
-            print(f"wrote {args.out}")
-        except OSError as exc:
-            print(f"nvib run: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
-            code = 1
+    if args.out and not write_out(res, model, t_end, save_every, args):
+        code = 1
     if args.plot:
         from ..plot import plot_run
 
@@ -151,9 +153,42 @@ def run(args) -> int:
             print(f"nvib run: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
             code = 1
     if not res.success:
-        print(f"nvib run: error: {failure_line(res, scheme, dt)}", file=sys.stderr)
+        kept = f"; the partial history{reached(res, ' up to')} is in {args.out}" if args.out and code == 0 else ""
+        print(f"nvib run: error: {failure_line(res, scheme, dt)}{kept}", file=sys.stderr)
         return 1
     return code
+
+
+def write_out(res, model, t_end: float, save_every: int, args) -> bool:
+    """Writes --out (the whole or the partial history); False, with the error on stderr, if it cannot."""
+    import numpy as np
+
+    from .. import save_result
+
+    try:
+        save_result(args.out, res, {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
+                                    "without": np.array(list(args.without or []), dtype=str)})
+    except OSError as exc:
+        print(f"nvib run: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
+        return False
+    print(f"wrote {args.out}")
+    return True
+
+
+def reached(res, prefix: str = " at") -> str:
+    """' at t = 1.25 s', the time of the last saved state ('' when none was saved)."""
+    return f"{prefix} t = {res.t[-1]:g} s" if len(res.t) else ""
+
+
+def step_error(exc: Exception, args, model) -> c.Usage:
+    """An error of the step count (dt, t_end): it names the flag when the user gave --dt or --t-end, else the
+    scene file and its key, since the value came from the scene."""
+    argument = getattr(exc, "argument", None) or "dt"
+    given = [n for n in ("dt", "t_end") if getattr(args, n) is not None]
+    if given:  # the ratio t_end/dt is at fault: the value the user changed is the one to look at
+        blamed = [n for n in argument.split(", ") if n in given] or given
+        return c.Usage("/".join(RUN_FLAGS[n] for n in blamed), str(exc).removeprefix(argument + ": "))
+    return c.Usage("SCENE", f"{model.scene['path']}: [scene] {exc}")
 
 
 def failure_line(result, scheme, dt: float) -> str:
@@ -194,10 +229,15 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
     if len(res.t):
         j = res.dofs.index(dof)
         u, v, a = (float(x[-1, j]) + 0.0 for x in (res.u, res.v, res.a))  # + 0.0: no "-0"
-        lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g}, v = {v:.9g}, a = {a:.9g}"))
+        unit = res.units[j]
+        lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g} {unit}, v = {v:.9g} {unit}/s, "
+                                      f"a = {a:.9g} {unit}/s^2"))
+        if res.relative_to_ground:
+            lines[-1] = (lines[-1][0], lines[-1][1] + " (relative to the ground)")
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
         lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D - W - E0| / max energy)"
                       if math.isfinite(rel) else "relative balance error: n/a (the energies overflowed)"))
+    lines += [("warning", w) for w in res.warnings]
     w = max(len(k) for k, _ in lines)
     print("\n".join(f"{k:<{w}}  {v}" for k, v in lines))
