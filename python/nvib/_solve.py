@@ -4,6 +4,7 @@ owns the stepping, saving, divergence and energy checks, counters and defaults."
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -108,6 +109,19 @@ def _absolute_a(self) -> np.ndarray:
 Result.absolute_a = property(_absolute_a)
 
 
+@contextlib.contextmanager
+def _partial_annotated(model: Model, warn: float):
+    """A run stopped by an exception (Ctrl-C, an error in a Python callback) carries the history saved
+    before it as ``exc.result``: annotated like any result (units, ground, warnings)."""
+    try:
+        yield
+    except BaseException as exc:
+        partial = getattr(exc, "result", None)
+        if isinstance(partial, Result):
+            _annotate(partial, model, warn)
+        raise
+
+
 def _warning_level(value) -> float:
     return _checks.real("warn_energy_error", value, positive=True) if value != math.inf else math.inf
 
@@ -200,7 +214,9 @@ class Stepper:
         """Continue to t_end and return the saved history of this stretch (options as in ``solve``)."""
         t_end = _checks.real("t_end", t_end)
         opts = _run_options(self.model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
-        res = _annotate(self._st.integrate(t_end, **opts), self.model, _warning_level(warn_energy_error))
+        warn = _warning_level(warn_energy_error)
+        with _partial_annotated(self.model, warn):
+            res = _annotate(self._st.integrate(t_end, **opts), self.model, warn)
         if throw and not res.success:
             raise error_for(res.failure, res)
         return res
@@ -260,7 +276,8 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
     warn = _warning_level(warn_energy_error)
-    res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
+    with _partial_annotated(model, warn):
+        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
     if throw and not res.success:
         raise error_for(res.failure, res)
     return res

@@ -130,6 +130,26 @@ inline std::unique_ptr<AnyStepper> make_stepper(PyModel& model, py::object schem
   return out;
 }
 
+// Runs f, which returns the nvib::Result of a run, into out->r. When the run stops on an exception
+// (Ctrl-C, an error raised by a Python callback) the history saved before it is not lost: it becomes
+// the exception's `result` attribute (a Result like any other, its counters those of the steps taken).
+template <class F>
+void keeping_partial(std::unique_ptr<PyResult>& out, F&& f) {
+  try {
+    out->r = f();
+  } catch (nvib::PartialRun& p) {
+    out->r = std::move(p.partial);
+    const std::exception_ptr cause = p.cause;
+    py::object partial = py::cast(std::move(out));
+    try {
+      std::rethrow_exception(cause);
+    } catch (py::error_already_set& e) {
+      py::setattr(e.value(), "result", partial);
+      throw;
+    }
+  }
+}
+
 inline SolveOptions solve_options(std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
                                   bool energy, double max_energy_error) {
   SolveOptions opt;
@@ -139,6 +159,7 @@ inline SolveOptions solve_options(std::int64_t save_every, std::vector<Index> do
   opt.energy = energy;
   opt.max_energy_error = max_energy_error;
   opt.throw_on_failure = false;
+  opt.keep_partial = true;
   return opt;
 }
 
@@ -159,18 +180,20 @@ inline void bind_run(py::module_& m) {
         SolveOptions opt = solve_options(save_every, std::move(dofs), max_displacement, energy, max_energy_error);
         opt.t0 = t0;
         auto result = std::make_unique<PyResult>();
+        result->scheme = scheme;
+        result->dt = dt;
+        result->names = model.dofs;
         with_scheme(scheme, "scheme", [&](const auto& sc) {
           model.visit([&](auto& md) {
             PyObserver obs{progress, !model.python()};
             RunBound bound(std::isnan(max_displacement) ? nvib::default_max_displacement(u0, v0, t_end - t0)
                                                         : max_displacement);
-            result->r = interruptible(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
+            keeping_partial(result, [&] {
+              return interruptible(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
+            });
           });
           return py::none();
         });
-        result->scheme = scheme;
-        result->dt = dt;
-        result->names = model.dofs;
         return result;
       },
       py::arg("model"), py::arg("scheme"), py::arg("dt"), py::arg("t_end"), py::arg("t0"), py::arg("u0"),
@@ -222,12 +245,14 @@ inline void bind_run(py::module_& m) {
              bool energy, double max_energy_error, py::object progress) {
             Exclusive x(s);
             auto result = std::make_unique<PyResult>();
-            result->r = s.integrate(t_end, solve_options(save_every, std::move(dofs), max_displacement, energy,
-                                                         max_energy_error),
-                                    std::move(progress));
             result->scheme = s.scheme;
             result->dt = s.dt();
             result->names = s.dofs;
+            keeping_partial(result, [&] {
+              return s.integrate(t_end, solve_options(save_every, std::move(dofs), max_displacement, energy,
+                                                      max_energy_error),
+                                 std::move(progress));
+            });
             return result;
           },
           py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},

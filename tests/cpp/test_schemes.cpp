@@ -198,6 +198,43 @@ int main() {
     auto e = nvib::solve(stiff, nvib::CentralDifference(), 3e-3, 10.0, u0, v0, unbounded);
     CHECK(e.status == nvib::Status::diverged && e.failure.message.find("not finite") != std::string::npos);
 
+    // An exception out of the step loop: by default it leaves as itself; with keep_partial as a
+    // PartialRun carrying it and the history saved before it, with the counters of the steps taken.
+    struct Stop {};
+    struct StopsAtHalf {
+      void operator()(const nvib::CVecRef& u, const nvib::CVecRef&, double t, nvib::VecRef out) const {
+        if (t > 0.5) throw Stop{};
+        out = 100.0 * u;
+      }
+    };
+    auto stops = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(1)), StopsAtHalf{});
+    nvib::SolveOptions every10 = opt;
+    every10.save_every = 10;
+    bool plain = false;
+    try {
+      nvib::solve(stops, nvib::CentralDifference(), 1e-3, 1.0, u0, v0, every10);
+    } catch (const Stop&) {
+      plain = true;
+    }
+    CHECK(plain);
+    every10.keep_partial = true;
+    bool partial = false;
+    try {
+      nvib::solve(stops, nvib::CentralDifference(), 1e-3, 1.0, u0, v0, every10);
+    } catch (const nvib::PartialRun& p) {
+      const nvib::Result& h = p.partial;
+      bool cause = false;
+      try {
+        std::rethrow_exception(p.cause);
+      } catch (const Stop&) {
+        cause = true;
+      }
+      // saved at steps 0, 10, ..., 500; the force at t = 0.501 (step 501) threw
+      partial = cause && h.t.size() == 51 && h.u.rows() == 51 && std::abs(h.t[50] - 0.5) < 1e-12 &&
+                h.u.allFinite() && h.stats.num_steps == 500 && h.stats.num_force_evals == 502;
+    }
+    CHECK(partial);
+
     // One iteration per step accepts each step after one solve, and reports
     // the residual it leaves; Newton reports at most about rtol.
     const Vector x0 = Vector::Constant(1, 1.5);

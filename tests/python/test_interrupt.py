@@ -101,3 +101,42 @@ def test_sigint_stops_the_set_up_of_precise_integration(python_sigint_handler):
     stopped = time.perf_counter()
     assert "at" in sent and stopped - t < 10.0
     assert stopped - sent["at"] < 2.0, f"stopped {stopped - sent['at']:.2f} s after the signal"
+
+
+def _check_partial(res, dt: float, save_every: int) -> None:
+    """A partial history: saved states every save_every steps from t = 0, all finite, counters of the steps taken."""
+    assert isinstance(res, nvib.Result) and len(res.t) >= 2
+    np.testing.assert_allclose(res.t, dt * save_every * np.arange(len(res.t)), rtol=1e-12, atol=1e-15)
+    assert np.all(np.isfinite(res.u)) and res.stats.num_steps >= (len(res.t) - 1) * save_every
+    assert res.units == ["m"] and res.stats.wall_time > 0.0
+
+
+@pytest.mark.parametrize("via", ["solve", "stepper"])
+def test_sigint_keeps_the_history_saved_before_it(via, python_sigint_handler):
+    """What a run saved before Ctrl-C is not lost: the KeyboardInterrupt carries it as ``result``."""
+    model = hardening()  # 1e9 steps (seconds of work), 1e6 states saved: only the interrupt ends it
+    stepper = nvib.Stepper(model, nvib.CentralDifference(), 1e-3)  # before the timer starts
+    sent = interrupt_after(DELAY)
+    with pytest.raises(KeyboardInterrupt) as info:
+        if via == "solve":
+            nvib.solve(model, nvib.CentralDifference(), dt=1e-3, t_end=1e6, save_every=1000)
+        else:
+            stepper.integrate(1e6, save_every=1000)
+    assert "at" in sent
+    _check_partial(info.value.result, 1e-3, 1000)
+
+
+def test_an_exception_in_a_python_force_keeps_the_history_saved_before_it():
+    """An error raised by a Python callback mid-run (here a KeyboardInterrupt raised by the force itself,
+    as Ctrl-C does in Python code) carries the history saved before it."""
+    def force(u, v, t):
+        if t > 0.05:
+            raise KeyboardInterrupt
+        return 100.0 * u
+
+    model = nvib.Model([1.0], force=force, u0=[1.0], uses_velocity=False, uses_time=True)
+    with pytest.raises(KeyboardInterrupt) as info:
+        nvib.solve(model, nvib.CentralDifference(), dt=1e-3, t_end=1.0, save_every=10)
+    res = info.value.result
+    _check_partial(res, 1e-3, 10)
+    assert res.t[-1] <= 0.05 + 1e-12 and len(res.t) == 6  # saved at 0, 0.01, ..., 0.05

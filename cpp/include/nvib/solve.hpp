@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <exception>
 #include <limits>
 #include <type_traits>
 #include <utility>
@@ -38,6 +39,9 @@ struct SolveOptions {
   // Checked every step from the 10th on; infinity means no check; NaN (the
   // default) means kDefaultMaxEnergyError with energy, no check without.
   double max_energy_error = std::numeric_limits<double>::quiet_NaN();
+  // An exception out of the step loop (an interrupt hook, a throwing force or observer) leaves as a
+  // PartialRun carrying the history saved so far and the exception, instead of the exception alone.
+  bool keep_partial = false;
   // The saved history may take at most this many bytes; NaN (the default): half the memory
   // available when the run starts; infinity: no limit. Checked before anything is allocated.
   double max_history_bytes = std::numeric_limits<double>::quiet_NaN();
@@ -205,6 +209,13 @@ struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
 
+// What leaves integrate() and solve() with SolveOptions::keep_partial when the step loop throws: the
+// history saved before the exception (counters of the steps taken) and the exception itself.
+struct PartialRun {
+  Result partial;
+  std::exception_ptr cause;
+};
+
 template <class Stepper, class Observer = NoObserver>
 Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe = Observer{}) {
   using clock = std::chrono::steady_clock;
@@ -318,73 +329,83 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
   std::int64_t to_save = k, done = 0;
   ClockPoll poll(opt.observe_period);
-  for (std::int64_t i = 1; i <= nsteps; ++i) {
-    Status s = st.step();
-    const bool saving = --to_save == 0 || i == nsteps;
-    if (s == Status::success) {
-      // u every step; v and a where a state is saved. A non-finite v_n or a_n
-      // makes u_{n+1} non-finite in every scheme, so a run still stops within
-      // one step, and no saved row holds a non-finite value.
-      if (!displacement_ok(st.u(), bound) || (saving && !rates_ok(st.v(), st.a()))) {
-        res.failure = divergence(st, i, bound);
-        s = Status::diverged;
+  // The history up to the last saved state, the counters of this call and the wall time.
+  auto finish = [&] {
+    if (row < nsave) {
+      res.t.conservativeResize(row);
+      res.u.conservativeResize(row, m);
+      res.v.conservativeResize(row, m);
+      res.a.conservativeResize(row, m);
+      if (opt.energy) res.energy.conservativeResize(row, 5);
+    }
+    res.max_residual = max_residual;
+    res.stats = st.stats();
+    res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
+    res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
+  };
+  try {
+    for (std::int64_t i = 1; i <= nsteps; ++i) {
+      Status s = st.step();
+      const bool saving = --to_save == 0 || i == nsteps;
+      if (s == Status::success) {
+        // u every step; v and a where a state is saved. A non-finite v_n or a_n
+        // makes u_{n+1} non-finite in every scheme, so a run still stops within
+        // one step, and no saved row holds a non-finite value.
+        if (!displacement_ok(st.u(), bound) || (saving && !rates_ok(st.v(), st.a()))) {
+          res.failure = divergence(st, i, bound);
+          s = Status::diverged;
+        }
+      } else {
+        res.failure = st.failure();
       }
-    } else {
-      res.failure = st.failure();
-    }
-    if (s != Status::success) {
-      res.status = s;
-      break;
-    }
-    if constexpr (has_accepted_residual<Stepper>::value) {
-      const double r = st.accepted_residual();
-      if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
-    }
-    if (opt.energy) {
-      const double q_in = model.input_power(st.u(), st.v(), st.time()), q_diss = model.dissipated_power(st.v());
-      work += 0.5 * h * (p_in + q_in);
-      diss += 0.5 * h * (p_diss + q_diss);
-      p_in = q_in;
-      p_diss = q_diss;
-      // From the 10th step: a run forced from rest starts with a tiny energy of which
-      // the start-up balance error is a large fraction (about 1/n^2: 0.9 at step 1,
-      // 0.005 at step 10 on the building); an unstable run stays near 1.
-      if (energy_check && i >= kEnergyCheckFrom) {
-        ek = model.kinetic(st.v());
-        ep = model.potential(st.u(), st.time());
-        have_energy = true;
-        escale = std::max(escale, std::abs(ek) + std::abs(ep) + std::abs(work) + std::abs(diss));
-        const double balance = ek + ep + diss - work - e0;
-        if (std::abs(balance) > energy_limit * escale) {
-          res.failure = energy_failure(st, i, balance, escale, energy_limit);
-          res.status = Status::diverged;
-          break;
+      if (s != Status::success) {
+        res.status = s;
+        break;
+      }
+      if constexpr (has_accepted_residual<Stepper>::value) {
+        const double r = st.accepted_residual();
+        if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
+      }
+      if (opt.energy) {
+        const double q_in = model.input_power(st.u(), st.v(), st.time()), q_diss = model.dissipated_power(st.v());
+        work += 0.5 * h * (p_in + q_in);
+        diss += 0.5 * h * (p_diss + q_diss);
+        p_in = q_in;
+        p_diss = q_diss;
+        // From the 10th step: a run forced from rest starts with a tiny energy of which
+        // the start-up balance error is a large fraction (about 1/n^2: 0.9 at step 1,
+        // 0.005 at step 10 on the building); an unstable run stays near 1.
+        if (energy_check && i >= kEnergyCheckFrom) {
+          ek = model.kinetic(st.v());
+          ep = model.potential(st.u(), st.time());
+          have_energy = true;
+          escale = std::max(escale, std::abs(ek) + std::abs(ep) + std::abs(work) + std::abs(diss));
+          const double balance = ek + ep + diss - work - e0;
+          if (std::abs(balance) > energy_limit * escale) {
+            res.failure = energy_failure(st, i, balance, escale, energy_limit);
+            res.status = Status::diverged;
+            break;
+          }
         }
       }
+      done = i;
+      if (saving) {
+        save();
+        to_save = k;
+      }
+      have_energy = false;
+      if (poll.tick()) {
+        observe(i, nsteps);
+        poll_interrupt();
+      }
     }
-    done = i;
-    if (saving) {
-      save();
-      to_save = k;
-    }
-    have_energy = false;
-    if (poll.tick()) {
-      observe(i, nsteps);
-      poll_interrupt();
-    }
+  } catch (...) {
+    if (!opt.keep_partial) throw;
+    finish();
+    throw PartialRun{std::move(res), std::current_exception()};
   }
   observe(done, nsteps);  // once at the end too, however short the run
-  if (row < nsave) {
-    res.t.conservativeResize(row);
-    res.u.conservativeResize(row, m);
-    res.v.conservativeResize(row, m);
-    res.a.conservativeResize(row, m);
-    if (opt.energy) res.energy.conservativeResize(row, 5);
-  }
-  res.max_residual = max_residual;
-  res.stats = st.stats();
-  res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
-  res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
+  finish();
   if (res.status != Status::success && opt.throw_on_failure) throw_failure(res.failure);
   return res;
 }
@@ -407,7 +428,14 @@ Result solve(const ModelT& model, const Scheme& scheme, double dt, double t_end,
   const Stats init = st.stats();
   SolveOptions inner = opt;
   inner.throw_on_failure = false;
-  Result res = integrate(st, t_end, inner, std::forward<Observer>(observe));
+  Result res;
+  try {
+    res = integrate(st, t_end, inner, std::forward<Observer>(observe));
+  } catch (PartialRun& p) {
+    p.partial.stats += init;
+    p.partial.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
+    throw;
+  }
   const double wall = std::chrono::duration<double>(clock::now() - start).count();
   res.stats += init;
   res.stats.wall_time = wall;

@@ -122,11 +122,11 @@ def run(args) -> int:
                     max_energy_error=args.max_energy_error)
     except KeyboardInterrupt as exc:
         bar.close(done=False)
-        res = getattr(exc, "result", None)  # the partial history, when the core hands it over
+        res = getattr(exc, "result", None)  # the history saved before the interrupt (none before the loop)
         if not args.out:
             note = ""
         elif res is None:
-            note = f"; the partial history is lost with the interrupt, {args.out} not written"
+            note = f"; it stopped before the first step, {args.out} not written"
         elif write_out(res, model, t_end, save_every, args):
             note = f"; the partial history{reached(res, ' up to')} is in {args.out}"
         else:
