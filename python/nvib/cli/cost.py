@@ -81,8 +81,8 @@ def run(args) -> int:
 
     model = load_model(args)
     name = model.scene["name"]
-    plot = args.plot or f"cost_{name}.png"
-    table = args.table or f"cost_{name}.md"
+    plot = args.plot if args.plot is not None else f"cost_{name}.png"  # '' is refused, not the default
+    table = args.table if args.table is not None else f"cost_{name}.md"
     c.check_output("--plot", plot, c.PLOT_FORMATS)
     c.check_output("--table", table, (".md",))
     schemes = [cost_scheme(x) for x in (args.schemes or default_schemes())]
