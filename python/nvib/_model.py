@@ -222,6 +222,36 @@ class Model:
         self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, _checks.boolean("uses_velocity", uses_velocity),
                                  _checks.boolean("uses_time", uses_time), laws, arrays)
 
+    def __repr__(self) -> str:
+        """Size, DOFs, mass, linear parts, effects by type, Python callables and flags, in one line."""
+        from collections import Counter
+
+        head = f"Model({self.name!r}, " if self.name else "Model("
+        dofs = list(self.dofs[:4]) + (["..."] if self.n > 5 else []) + ([self.dofs[self.n - 1]] if self.n > 4 else [])
+        parts = [f"{self.n} DOF{'s' if self.n != 1 else ''} [{', '.join(map(str, dofs))}]",
+                 f"mass {self._core.mass_kind}"]
+        units = sorted(set(self.units))
+        parts.append(f"units {'/'.join(units)}")
+        for name, mat in (("K", self.K), ("C", self.C)):
+            if mat.nnz:
+                parts.append(f"{name} with {mat.nnz} nonzeros")
+        counts = Counter(e.type for e in (self.effects or []))
+        for arr in self.effect_arrays:
+            counts[arr.type] += len(arr)
+        if counts:
+            parts.append("effects: " + ", ".join(k if c == 1 else f"{k} x{c}" for k, c in counts.items()))
+        if self.python_laws:
+            parts.append(f"{len(self.python_laws)} Python law{'s' if len(self.python_laws) != 1 else ''}")
+        if self.force is not None:
+            parts.append("force callable" + (" with tangent" if self.tangent is not None else ""))
+        if self.without:
+            parts.append(f"without {', '.join(self.without)}")
+        flags = [f for f, on in (("linear", self.is_linear), ("uses_velocity", self.uses_velocity),
+                                 ("uses_time", self.uses_time)) if on]
+        if flags:
+            parts.append(", ".join(flags))
+        return head + "; ".join(parts) + ")"
+
     def __reduce__(self):
         """Pickled as its arguments and its attributes (u0, v0, scene, ...): the core is rebuilt on loading, so
         a model goes to another process (a process pool, Dask) as long as its callables pickle."""

@@ -109,6 +109,20 @@ def _absolute_a(self) -> np.ndarray:
 Result.absolute_a = property(_absolute_a)
 
 
+def _energy_repr(self) -> str:
+    n = len(self.kinetic)
+    if n == 0:
+        return "Energy(0 states)"
+    with np.errstate(all="ignore"):
+        rel = self.relative_balance_error()
+    end = ", ".join(f"{k.replace('_', ' ')} {float(v[-1]):.6g}"
+                    for k, v in self.as_dict().items() if k != "balance_error")
+    return f"Energy({n} state{'s' if n != 1 else ''}; at the end: {end}; relative balance error {rel:.3g})"
+
+
+Energy.__repr__ = _energy_repr
+
+
 @contextlib.contextmanager
 def _partial_annotated(model: Model, warn: float):
     """A run stopped by an exception (Ctrl-C, an error in a Python callback) carries the history saved
@@ -172,6 +186,11 @@ class Stepper:
         v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
         self._st = _core.Stepper(model._core, scheme, self.dt)
         self._st.initialize(t0, u0, v0)
+
+    def __repr__(self) -> str:
+        model = f"{self.model.name!r}, " if self.model.name else ""
+        return (f"Stepper({self.scheme!r}, dt={self.dt:g} s, t={self.t:g} s, step {self.step_index}; "
+                f"model {model}{self.model.n} DOF{'s' if self.model.n != 1 else ''})")
 
     t = property(lambda self: self._st.t, doc="current time")
     u = property(lambda self: self._st.u, doc="current displacement")
