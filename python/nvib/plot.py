@@ -1,7 +1,9 @@
 """Plots of runs (PNG, SVG or PDF via matplotlib, imported only when a plot is made).
 
 ``plot_run(result, model, dof, path)`` draws the displacement histories, the
-phase locus of one DOF and, when the run recorded energy, the energy terms.
+phase locus of one DOF (or of an effect's measure) and, when the run recorded
+energy, the energy terms, every axis with its unit; ``run_figure`` returns
+the same figure instead of writing it.
 The figures are drawn on their own Agg canvas: no pyplot state is touched,
 so this works the same in scripts, servers and notebooks.
 """
@@ -17,19 +19,16 @@ MAX_OTHER_DOFS = 4   # beside the highlighted DOF when a model has more than MAX
 MAX_ALL_DOFS = 6
 
 
-def _new_figure(ncols: int, split_first: bool, width: float = 5.6, height: float = 4.8):
-    """Figure on its own Agg canvas; the first column is split in two rows when asked."""
+def _new_figure(ncols: int, left_rows: int, width: float = 5.6, height: float = 4.8):
+    """Figure on its own Agg canvas; the first column is split in ``left_rows`` rows (sharing no axes: a
+    zoom panel has its own time range), the other columns span the full height."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width * ncols, height), layout="constrained")
+    fig = Figure(figsize=(width * ncols, height * (1.0 + 0.25 * max(0, left_rows - 2))), layout="constrained")
     FigureCanvasAgg(fig)
-    gs = fig.add_gridspec(2, ncols)
-    if split_first:
-        top = fig.add_subplot(gs[0, 0])
-        first = [top, fig.add_subplot(gs[1, 0], sharex=top)]
-    else:
-        first = [fig.add_subplot(gs[:, 0])]
+    gs = fig.add_gridspec(left_rows, ncols)
+    first = [fig.add_subplot(gs[i, 0]) for i in range(left_rows)]
     return fig, first, [fig.add_subplot(gs[:, j]) for j in range(1, ncols)]
 
 
@@ -107,85 +106,189 @@ def _status_note(result) -> str | None:
     return f"{what}{where}: partial history"
 
 
-def plot_run(result, model, dof, path, title: str | None = None, *, dpi: int = 110) -> None:
-    """Write a figure of one run to ``path`` (format from the extension: .png, .svg, .pdf).
+DENSE_CYCLES = 150  # a history with more cycles than this over the run gets a zoom panel
+ZOOM_CYCLES = 8      # cycles shown in the zoom panel
 
-    Left: the displacement history of ``dof`` on its own axes, below it the
-    other DOFs (for more than six DOFs only the four that move most). Next:
-    the phase locus (u, v) of ``dof``. With ``result.energy``: a third panel with the
-    energy terms and the balance. ``dof`` is a DOF name or model index;
-    ``title`` defaults to the scene title, the scheme and dt. A failed run
-    (partial history) is drawn with its failure noted.
+
+def cycles(y: np.ndarray) -> float:
+    """Oscillation cycles in a history: half its crossings of its mean (0 for fewer than three samples)."""
+    y = np.asarray(y, dtype=float)
+    y = y[np.isfinite(y)]
+    if y.size < 3:
+        return 0.0
+    s = np.signbit(y - y.mean())
+    return 0.5 * float(np.count_nonzero(s[1:] != s[:-1]))
+
+
+def _unit_of(units: list[str]) -> str:
+    """One unit for a set of DOFs ("m"), or the distinct ones ("m, rad")."""
+    return ", ".join(dict.fromkeys(units))
+
+
+def _energy_unit(units: list[str]) -> str:
+    """J where the DOFs are in SI (m, rad) and the mass in kg, else the model's own energy unit."""
+    return "J" if set(units) <= {"m", "rad"} else "model units"
+
+
+def _measure_series(result, model, measure: str):
+    """(label, d, d', unit, moves with the ground) of the effect named ``measure``: d = g . u over its
+    measure's DOFs. A measure whose coefficients sum to zero (a storey drift) does not see a rigid motion
+    of the ground: it is the same whether u is relative or absolute."""
+    effects = [e for e in (model.effects or []) if e.name == measure]
+    if not effects:
+        names = sorted({e.name for e in (model.effects or []) if e.name})
+        raise _checks.value_error("measure", f"no effect named {measure!r} in this model (named effects: "
+                                             f"{', '.join(names) or 'none'})")
+    e = effects[0]
+    names = list(result.dofs)
+    cols = []
+    for i in e.index:
+        dof = model.dofs[int(i)]
+        if dof not in names:
+            raise _checks.value_error("measure", f"{measure!r} measures {dof!r}, which this result did not save")
+        cols.append(names.index(dof))
+    g = np.asarray(e.coef, dtype=float)
+    d = np.asarray(result.u)[:, cols] @ g
+    dd = np.asarray(result.v)[:, cols] @ g
+    unit = _unit_of([result.units[c] for c in cols])
+    terms = " ".join(f"{'+' if c >= 0 else '-'} {'' if abs(c) == 1 else f'{abs(c):g} '}{names[k]}"
+                     for c, k in zip(g, cols))
+    terms = terms[2:] if terms.startswith("+ ") else "-" + terms[2:]
+    return f"{measure} ({e.type}: d = {terms})", d, dd, unit, bool(abs(g.sum()) > 1e-12 * np.abs(g).sum())
+
+
+def plot_run(result, model, dof, path, title: str | None = None, *, measure: str | None = None,
+             dpi: int = 110) -> None:
+    """Write ``run_figure(result, model, dof, title, measure=measure)`` to ``path`` (format from the
+    extension: .png, .svg, .pdf)."""
+    run_figure(result, model, dof, title, measure=measure).savefig(path, dpi=dpi)
+
+
+def run_figure(result, model, dof, title: str | None = None, *, measure: str | None = None):
+    """The figure of one run (a matplotlib Figure on its own Agg canvas).
+
+    Left: the displacement history of ``dof`` (or, with ``measure``, the measure d = g . u of the effect
+    of that name, such as a storey drift) on its own axes; a history that oscillates densely (more than
+    150 cycles) gets a second panel zoomed on its first cycles; below, the other DOFs (for more than six
+    DOFs only the four that move most). Next: the phase locus (u, v) of ``dof`` (or d, d'). With
+    ``result.energy``: a third panel with the energy terms and the balance. Every axis carries its unit
+    (``result.units``; time in s); under a ground motion the displacements are labelled relative to the
+    ground. ``dof`` is a DOF name or model index; ``title`` defaults to the scene title, the scheme and
+    dt. A failed run (partial history) is drawn with its failure noted.
     """
     col = _dof_column(result, model, dof)
     name = result.dofs[col]
+    units = list(result.units)
+    rel = " relative to the ground" if result.relative_to_ground else ""
+    if measure is not None:
+        label, y, yd, unit, grounded = _measure_series(result, model, measure)
+        short = measure
+        rel_y = rel if grounded else ""
+    else:
+        label, y, yd, unit = name, np.asarray(result.u)[:, col], np.asarray(result.v)[:, col], units[col]
+        short, rel_y = name, rel
     energy = getattr(result, "energy", None)
     t = np.asarray(result.t)
     sel = _thin(len(t))
     ts = t[sel]
     shown = shown_dofs(result, col)
-    others = [j for j in shown if j != col]
-    fig, left, axes = _new_figure(3 if energy is not None else 2, split_first=bool(others))
+    others = [j for j in shown if j != col] if measure is None else shown
+    n_cycles = cycles(y)
+    zoom = n_cycles > DENSE_CYCLES and len(t) > 2 and result.success
+    fig, left, axes = _new_figure(3 if energy is not None else 2, 1 + int(zoom) + int(bool(others)))
 
-    # The selected DOF gets its own axes: other DOFs may move on another scale (or in other units).
+    # The selected quantity gets its own axes: other DOFs may move on another scale (or in other units).
     failed = not result.success
     ax = left[0]
-    ax.plot(ts, result.u[sel, col], lw=1.6, color="k")
+    ax.plot(ts, y[sel], lw=1.0 if zoom else 1.6, color="k")
     if failed:
-        _log_if_blown_up(ax, [result.u[:, col]])
-    ax.set_ylabel(f"u  ({name})")
-    ax.set_title(f"Displacement of {name}")
+        _log_if_blown_up(ax, [y])
+    ax.set_ylabel(f"{short} [{unit}]")
+    ax.set_title(f"{'Measure' if measure is not None else 'Displacement of'} {label}{rel_y}", fontsize=10)
+    ax.set_xlabel("t [s]")
     ax.grid(True, alpha=0.3)
+    row = 1
+    if zoom:
+        # the first ZOOM_CYCLES cycles at full resolution: the whole run is a solid band at this density
+        t_end = t[0] + (t[-1] - t[0]) * ZOOM_CYCLES / n_cycles
+        k = max(3, int(np.searchsorted(t, t_end, side="right")))
+        ax.axvspan(t[0], t[k - 1], color="C1", alpha=0.25, lw=0)
+        ax = left[row]
+        ax.plot(t[:k], y[:k], lw=1.2, color="k", marker="." if k < 200 else None, ms=3)
+        ax.set_ylabel(f"{short} [{unit}]")
+        ax.set_xlabel("t [s]")
+        ax.set_title(f"First {ZOOM_CYCLES} of {n_cycles:.0f} cycles (shaded above)", fontsize=10)
+        ax.grid(True, alpha=0.3)
+        row += 1
     if others:
-        ax.tick_params(labelbottom=False)
-        ax = left[1]
+        ax = left[row]
+        mixed = len({units[j] for j in others}) > 1
         for j in others:
-            ax.plot(ts, result.u[sel, j], lw=1.0, alpha=0.85, label=result.dofs[j])
+            ax.plot(ts, result.u[sel, j], lw=1.0, alpha=0.85,
+                    label=f"{result.dofs[j]} [{units[j]}]" if mixed else result.dofs[j])
         if failed:
             _log_if_blown_up(ax, [result.u[:, j] for j in others])
         hidden = len(result.dofs) - len(shown)
-        ax.set_ylabel("u")
-        ax.set_title("Other DOFs" + (f" ({len(others)} of {len(result.dofs) - 1}: those that move most)"
-                                     if hidden else ""), fontsize=10)
+        ax.set_ylabel("u [" + ("see legend" if mixed else units[others[0]]) + "]")
+        what = "DOFs" if measure is not None else "Other DOFs"
+        total = len(result.dofs) - (0 if measure is not None else 1)
+        ax.set_title(what + (f" ({len(others)} of {total}: those that move most)" if hidden else "") + rel,
+                     fontsize=10)
         ax.legend(fontsize=7, loc="best", ncol=1 if len(others) <= 3 else 2)
         ax.grid(True, alpha=0.3)
-    ax.set_xlabel("t [s]")
+        ax.set_xlabel("t [s]")
 
     ax = axes[0]
-    u, v = result.u[sel, col], result.v[sel, col]
-    ax.plot(u, v, lw=1.0, color="C0")
+    u, v = y[sel], yd[sel]
+    ax.plot(u, v, lw=1.0 if not zoom else 0.5, color="C0")
     if len(u):
         ax.plot(u[0], v[0], "o", color="C2", label=f"t = {t[0]:g} s")
         ax.plot(u[-1], v[-1], "s", color="C3", label=f"t = {t[-1]:g} s")
         ax.legend(fontsize=8, loc="best")
     if failed:
-        _log_if_blown_up(ax, [result.u[:, col]], axis="x")
-        _log_if_blown_up(ax, [result.v[:, col]], axis="y")
-    ax.set_xlabel(f"u  ({name})")
-    ax.set_ylabel(f"v  ({name})")
-    ax.set_title(f"Phase locus of {name}")
+        _log_if_blown_up(ax, [y], axis="x")
+        _log_if_blown_up(ax, [yd], axis="y")
+    ax.set_xlabel(f"{short} [{unit}]")
+    ax.set_ylabel(f"d{short}/dt [{unit}/s]")
+    ax.set_title(f"Phase locus of {short}{rel_y}", fontsize=10)
     ax.grid(True, alpha=0.3)
 
     if energy is not None:
         ax = axes[1]
         terms = [("kinetic", energy.kinetic), ("potential", energy.potential), ("work in", energy.work_in),
                  ("dissipated", energy.dissipated)]
-        for label, y in terms:
-            if np.any(y != 0):
-                ax.plot(ts, np.asarray(y)[sel], lw=1.0, label=label)
+        for lab, e in terms:
+            if np.any(e != 0):
+                ax.plot(ts, np.asarray(e)[sel], lw=1.0, label=lab)
         with np.errstate(all="ignore"):  # a run that blew up may carry inf energies
             balance = energy.kinetic + energy.potential + energy.dissipated - energy.work_in
-            rel = energy.relative_balance_error()
+            relerr = energy.relative_balance_error()
         ax.plot(ts, balance[sel], "k--", lw=1.2, label="K + P + D - W")
         if failed:
-            _log_if_blown_up(ax, [y for _, y in terms] + [balance])
+            _log_if_blown_up(ax, [e for _, e in terms] + [balance])
         ax.set_xlabel("t [s]")
-        ax.set_ylabel("energy [J]")
-        ax.set_title(f"Energy (max rel. balance error {rel:.2e})" if np.isfinite(rel) else "Energy")
+        ax.set_ylabel(f"energy [{_energy_unit(units)}]")
+        ax.set_title(f"Energy (max rel. balance error {relerr:.2e})" if np.isfinite(relerr) else "Energy",
+                     fontsize=10)
         ax.legend(fontsize=8, loc="best")
         ax.grid(True, alpha=0.3)
 
+    for ax in fig.axes:
+        tidy_ticks(ax)
     note = _status_note(result)
     head = default_title(result, model) if title is None else title
     fig.suptitle(head + (f"\n{note}" if note else ""), fontsize=11, color="k" if note is None else "C3")
-    fig.savefig(path, dpi=dpi)
+    return fig
+
+
+def tidy_ticks(ax) -> None:
+    """Tick labels that do not run into each other: at most six per axis, and values below 1e-3 or above
+    1e4 as a mantissa with a common power of ten at the end of the axis."""
+    from matplotlib.ticker import MaxNLocator, ScalarFormatter
+
+    for axis in (ax.xaxis, ax.yaxis):
+        if isinstance(axis.get_major_formatter(), ScalarFormatter):  # not the symmetric-log axes of a blow-up
+            axis.set_major_locator(MaxNLocator(nbins=6))
+            fmt = ScalarFormatter(useMathText=True)
+            fmt.set_powerlimits((-3, 4))
+            axis.set_major_formatter(fmt)

@@ -211,3 +211,19 @@ def test_cli_cost_defaults_and_bad_input(capsys, tmp_path):
     assert code == 2 and "--dof" in err
     code, _, err = run_cli(capsys, "cost", "hardening", "--plot", str(tmp_path / "x.txt"))
     assert code == 2 and "--plot" in err
+
+
+def test_work_precision_diagram_stars_the_cheapest_run_at_the_target(rows):
+    from nvib.analysis.cost import work_precision_figure
+
+    ok = [r for r in rows if r["status"] == "success"]
+    target = 1.5 * max(min(r["max_error"] for r in ok if r["contender"] == who) for who in ("nvib", "scipy"))
+    ax = work_precision_figure(rows, target=target).axes[0]
+    stars = [ln for ln in ax.lines if ln.get_marker() == "*"]
+    best = {who: nvib.cheapest(rows, target, contender=who) for who in ("nvib", "scipy")}
+    expected = {(b["wall_time"], b["max_error"]) for b in best.values() if b is not None}
+    assert {(ln.get_xdata()[0], ln.get_ydata()[0]) for ln in stars} == expected and expected
+    labels = [t.get_text() for t in ax.texts]
+    assert any(best["nvib"]["label"] in t and f"dt = {best['nvib']['dt']:g} s" in t for t in labels)
+    # without a target nothing is starred
+    assert not [ln for ln in work_precision_figure(rows).axes[0].lines if ln.get_marker() == "*"]

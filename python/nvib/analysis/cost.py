@@ -398,9 +398,14 @@ def markdown_table(rows: list[dict]) -> str:
 
 def plot_work_precision(rows: list[dict], path: str, *, title: str | None = None, target: float | None = None,
                         dpi: int = 110) -> None:
+    """Write ``work_precision_figure(rows, title=title, target=target)`` to ``path``."""
+    work_precision_figure(rows, title=title, target=target).savefig(path, dpi=dpi)
+
+
+def work_precision_figure(rows: list[dict], *, title: str | None = None, target: float | None = None):
     """Work-precision diagram: log max_error against log wall time, one line per (contender, label), points
     in order of dt or rtol. Failed runs are counted in the legend, not drawn. ``target`` draws a dashed
-    line at that error."""
+    line at that error and marks the cheapest run of each contender (nvib, SciPy) that reaches it with a star."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -432,15 +437,25 @@ def plot_work_precision(rows: list[dict], path: str, *, title: str | None = None
             ax.plot([], [], ls=ls, marker=marker, color=color, label=name + " (nothing to draw)")
     if target is not None:
         ax.axhline(target, color="k", ls=":", lw=1.0, label=f"error {target:g}")
+        for who in dict.fromkeys(r["contender"] for r in rows):  # the cheapest run of each contender at the target
+            best = cheapest(rows, target, contender=who)
+            if best is None or not best["max_error"] > 0:
+                continue
+            setting = f"dt = {best['dt']:g} s" if who != "scipy" else f"rtol = {best['rtol']:g}"
+            ax.plot(best["wall_time"], best["max_error"], marker="*", ms=16, mfc="gold", mec="k", mew=1.0,
+                    ls="none", zorder=5, label=f"cheapest {who} at error <= {target:g}")
+            ax.annotate(f"{best['label']}\n{setting}, {best['wall_time']:.3g} s", (best["wall_time"], best["max_error"]),
+                        xytext=(8, -14), textcoords="offset points", fontsize=7,
+                        bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.6", alpha=0.85))
     if drawn:
         ax.set_xscale("log")
         ax.set_yscale("log")
     ax.set_xlabel("wall time [s] (best of repeats)")
     ref = next((r["reference"] for r in rows if isinstance(r["reference"], str)), "")
     dofs = next((r["dofs"] for r in rows if isinstance(r["dofs"], str)), "")
-    ax.set_ylabel(f"max |u - u_ref| / max |u_ref|  ({dofs})")
+    ax.set_ylabel(f"relative error max |u - u_ref| / max |u_ref| [-]  ({dofs})")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="best", ncol=2 if len(groups) > 8 else 1)
     head = title or "Work-precision"
     fig.suptitle(f"{head}\nreference: {ref}", fontsize=10)
-    fig.savefig(path, dpi=dpi)
+    return fig

@@ -45,8 +45,9 @@ def add_parser(sub) -> None:
     p.add_argument("--repeats", type=c.positive_int, default=3, help="timed runs per row, the best is kept (default 3)")
     p.add_argument("--max-time", type=c.positive_real, default=30.0, metavar="S",
                    help="skip a SciPy method's tighter tolerances once a run takes longer (default 30 s)")
-    p.add_argument("--target", type=c.positive_real, metavar="ERR",
-                   help="draw this error level and name the cheapest run of each contender reaching it")
+    p.add_argument("--target", type=c.positive_real, metavar="ERR", default=1e-3,
+                   help="draw this error level and name (and star on the diagram) the cheapest run of each contender "
+                        "reaching it (default 1e-3)")
     p.add_argument("--plot", metavar="PNG", help="work-precision diagram (default cost_SCENE.png)")
     p.add_argument("--table", metavar="MD", help="markdown table (default cost_SCENE.md)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,

@@ -53,6 +53,9 @@ def add_parser(sub) -> None:
                    help="stop as diverged once some |u_i| exceeds U (default: 1e10 x max(1, max|u0|, "
                         "max|v0| x duration); 'inf': only non-finite states)")
     g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
+    g.add_argument("--measure", metavar="EFFECT",
+                   help="plot the measure d = g . u of the effect of this name (a storey drift: --measure storey2) "
+                        "instead of the DOF's displacement")
     g.add_argument("--energy", action="store_true",
                    help="record the energy balance; a run whose balance error exceeds --max-energy-error times "
                         "the energy scale stops as diverged")
@@ -99,6 +102,13 @@ def run(args) -> int:
     dof = args.dof if args.dof is not None else model.scene["plot_dof"]
     if dof not in model.dofs:
         raise c.Usage("--dof", f"unknown DOF {dof!r} in scene {model.scene['name']!r} (DOFs: {', '.join(model.dofs)})")
+    if args.measure is not None:
+        named = sorted({e.name for e in (model.effects or []) if e.name})
+        if args.measure not in named:
+            raise c.Usage("--measure", f"no effect named {args.measure!r} in scene {model.scene['name']!r} "
+                                       f"(named effects: {', '.join(named) or 'none'})")
+        if not args.plot:
+            raise c.Usage("--measure", "it chooses what --plot draws; give --plot too")
     dt = args.dt if args.dt is not None else model.scene["dt"]
     t_end = args.t_end if args.t_end is not None else model.scene["t_end"]
     if dt is None:
@@ -147,7 +157,7 @@ def run(args) -> int:
         from ..plot import plot_run
 
         try:
-            plot_run(res, model, dof, args.plot)
+            plot_run(res, model, dof, args.plot, measure=args.measure)
             print(f"wrote {args.plot}")
         except OSError as exc:
             print(f"nvib run: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
