@@ -270,3 +270,21 @@ def test_cli_bad_input_exits_2_naming_the_argument(capsys, argv, argument):
     assert code == 2
     assert argument in err
     assert err.strip().splitlines()[-1].startswith("nvib stability: error:")
+
+
+def test_stability_figure_separates_schemes_of_equal_spectral_radius_by_their_period_error():
+    """Undamped, every scheme here has rho = 1 below its limit: the period-error panel tells them apart,
+    CentralDifference shortening the period (Omega^2/24), Newmark lengthening it (Omega^2/12), PIM exact."""
+    pytest.importorskip("matplotlib")
+    from nvib.analysis.stability import stability_figure
+
+    schemes = [nvib.CentralDifference(), nvib.Newmark(), nvib.PreciseIntegration()]
+    fig = stability_figure(schemes, omega_h=np.geomspace(1e-2, 1e1, 60))
+    rho_ax, period_ax = fig.axes
+    legend = [t.get_text() for t in period_ax.get_legend().get_texts()]
+    assert [lab.rsplit(" ", 1)[1] for lab in legend] == ["(shortens)", "(lengthens)", "(exact)"]
+    assert period_ax.get_ylabel() == "period error |T̄/T - 1| [-]" and rho_ax.get_ylabel() == "spectral radius ρ"
+    lcdm, newmark = period_ax.lines[0], period_ax.lines[1]
+    k = 0  # at Omega = 0.01 the leading terms hold to ~1e-5 relative
+    assert lcdm.get_ydata()[k] == pytest.approx(1e-4 / 24, rel=1e-3)
+    assert newmark.get_ydata()[k] == pytest.approx(1e-4 / 12, rel=1e-3)

@@ -337,8 +337,14 @@ def scheme_label(scheme) -> str:
 
 def plot_spectral_radius(schemes, path: str, *, xi: float = 0.0, omega_h=None, labels=None,
                          critical=None, title: str | None = None) -> None:
-    """Spectral radius against Ω (log axis), one line per scheme, written to ``path``
-    (PNG, SVG or PDF by its extension). ``omega_h``: the Ω to evaluate (default 300
+    """Write ``stability_figure(...)`` (same arguments) to ``path`` (PNG, SVG or PDF by its extension)."""
+    stability_figure(schemes, xi=xi, omega_h=omega_h, labels=labels, critical=critical,
+                     title=title).savefig(path, dpi=120)
+
+
+def stability_figure(schemes, *, xi: float = 0.0, omega_h=None, labels=None, critical=None,
+                     title: str | None = None):
+    """Spectral radius and period error against Ω (log axes), one line per scheme. ``omega_h``: the Ω to evaluate (default 300
     points from 1e-2 to 1e2); ``critical``: Ω_crit per scheme, marked on the curves
     (computed when None)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -356,9 +362,9 @@ def plot_spectral_radius(schemes, path: str, *, xi: float = 0.0, omega_h=None, l
     if critical is None:
         critical = [critical_omega_h(s, xi, omega_max=max(OMEGA_LIMIT, float(oms[-1]))) for s in schemes]
 
-    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+    fig = Figure(figsize=(13.0, 5.0), layout="constrained")
     FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
+    ax, ax_t = fig.subplots(1, 2)
     ymax = 1.3
     for k, (s, lab, oc) in enumerate(zip(schemes, labels, critical)):
         rho = spectral_radius(s, oms, xi)
@@ -376,7 +382,27 @@ def plot_spectral_radius(schemes, path: str, *, xi: float = 0.0, omega_h=None, l
     ax.set_ylim(0.0, ymax)
     ax.set_xlabel("Ω = ω Δt")
     ax.set_ylabel("spectral radius ρ")
-    ax.set_title(title or f"Spectral radius of the amplification matrix, linear SDOF, ξ = {xi:g}")
+    ax.set_title("Spectral radius of the amplification matrix", fontsize=11)
     ax.grid(True, which="both", alpha=0.25)
     ax.legend(fontsize=8, loc="lower left")
-    fig.savefig(path, dpi=120)
+
+    # Schemes that share rho = 1 (no numerical dissipation) differ in their period error: the second panel.
+    floor = 1e-12
+    for k, (s, lab) in enumerate(zip(schemes, labels)):
+        err = np.asarray(period_error(s, oms, xi), dtype=float)
+        finite = err[np.isfinite(err)]
+        how = ("" if not finite.size else " (exact)" if np.max(np.abs(finite)) < 1e3 * floor
+               else " (lengthens)" if finite[0] > 0 else " (shortens)")
+        ax_t.plot(oms, np.maximum(np.abs(err), floor), ("-", "--", "-.", ":")[k % 4], lw=max(1.0, 2.6 - 0.3 * k),
+                  label=f"{lab}{how}")
+    ax_t.set_xscale("log")
+    ax_t.set_yscale("log")
+    ax_t.set_xlim(oms[0], oms[-1])
+    ax_t.set_ylim(floor / 2, 10.0)
+    ax_t.set_xlabel("Ω = ω Δt")
+    ax_t.set_ylabel("period error |T̄/T - 1| [-]")
+    ax_t.set_title(f"Period error of the principal root (below {floor:g}: exact to round-off)", fontsize=11)
+    ax_t.grid(True, which="both", alpha=0.25)
+    ax_t.legend(fontsize=8, loc="lower right")
+    fig.suptitle(title or f"Linear SDOF u'' + 2ξωu' + ω²u = 0, ξ = {xi:g}", fontsize=12)
+    return fig
