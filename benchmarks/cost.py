@@ -57,7 +57,7 @@ def schemes():
             nvib.Newmark(iteration="none"), nvib.Newmark(iteration="newton"),
             nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="none"),
             nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="newton"),
-            nvib.PreciseIntegration(), nvib.PreciseIntegration(order=3)]
+            nvib.PreciseIntegration(), nvib.PreciseIntegration(interpolation=3)]
 
 
 def geometric(start: float, factor: float, count: int) -> list[float]:
@@ -214,7 +214,7 @@ def cpu_time_table(exes: dict | None, rounds: int, repeats: int) -> list[str]:
               nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="none")),
              ("GαM", "GαM(0.5, 0.5, 0.25, 0.5), Newton",
               nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="newton")),
-             ("PIM", "PIM (order 2, 1 correction)", nvib.PreciseIntegration()),
+             ("PIM", "PIM (interpolation 2, 1 correction)", nvib.PreciseIntegration()),
              (None, "LCDM (context)", nvib.CentralDifference())]
     best = {label: math.inf for _, label, _ in cases}
     loop_best = math.inf

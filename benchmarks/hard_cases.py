@@ -124,7 +124,7 @@ def pim_variants() -> list[str]:
     model = H.scene("pendulum")
     out = ["Pendulum IC1 with PIM variants: first time over the top (– = never) and E(t_end)/E0.", "",
            "| PIM variant | dt = 0.3 s, 1800 s | dt = 0.8 s, 1800 s |", "|---|---|---|"]
-    for kw in (dict(order=1), dict(order=2), dict(order=3), dict(corrections=0), dict(corrections=2)):
+    for kw in (dict(interpolation=1), dict(interpolation=2), dict(interpolation=3), dict(corrections=0), dict(corrections=2)):
         cells = []
         for dt in (0.3, 0.8):
             r = nvib.solve(model, nvib.PreciseIntegration(**kw), dt=dt, t_end=1800.0, throw=False)

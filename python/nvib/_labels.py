@@ -5,6 +5,6 @@ from __future__ import annotations
 
 def scheme_label(scheme, *, iteration: bool = True) -> str:
     """LCDM, LCDM (half-step v), CEMDTS(0.45), Zhai(0.5,0.5), Newmark (newton), Newmark(1/6,0.5) (incremental),
-    GαM(0.5,0.5) (newton), GαM(0,1/3,4/9,5/6) (modified), PIM, PIM(N=8, order 3, 2 corr.).
+    GαM(0.5,0.5) (newton), GαM(0,1/3,4/9,5/6) (modified), PIM, PIM(N=8, interp. 3, 2 corr.).
     ``iteration=False`` leaves the Newton mode out (a linear analysis, where it changes nothing)."""
     return scheme.label if iteration else scheme.short_label

@@ -89,6 +89,14 @@ inline py::object range_of(const param::Choice& p) {
   return names;
 }
 inline py::object range_of(const param::NewtonOptions&) { return py::none(); }
+// The previous name of a renamed parameter (None if it was never renamed).
+template <class P>
+py::object formerly_of(const P& p) {
+  if constexpr (std::is_same_v<P, param::Int>) {
+    if (p.formerly != nullptr) return py::str(p.formerly);
+  }
+  return py::none();
+}
 
 // Reals may be given by position (schemes only); everything else by name.
 template <class S>
@@ -111,6 +119,7 @@ py::list describe() {
     d["bounds"] = bounds_of(p);
     d["range"] = range_of(p);
     d["positional"] = positional_reals<S>() && std::string(kind_of(p)) == "real";
+    d["formerly"] = formerly_of(p);
     out.append(d);
   });
   return out;
@@ -148,9 +157,15 @@ S construct(const py::args& args, const py::kwargs& kwargs) {
     const std::string key = item.first.cast<std::string>();
     if (given.contains(item.first)) raise_type_error(key, std::string("given twice (by position and by name) to ") + S::name);
     const bool shortcut = key == "iteration" && nvib::has_newton<S>::value;
-    if (!shortcut && std::find(all.begin(), all.end(), key) == all.end())
+    if (!shortcut && std::find(all.begin(), all.end(), key) == all.end()) {
+      for (auto p : params)
+        if (!p["formerly"].is_none() && p["formerly"].cast<std::string>() == key)
+          raise_type_error(key, "renamed " + p["name"].cast<std::string>() + " in " + S::name + " (" +
+                                    p["doc"].cast<std::string>() + "): give " + p["name"].cast<std::string>() +
+                                    "=" + std::string(py::str(item.second)));
       raise_type_error(key, std::string("unknown parameter of ") + S::name + " (expected " +
                                 (all.empty() ? std::string("none") : names_of<S>(params, false)) + ")");
+    }
     given[item.first] = item.second;
   }
   S s{};

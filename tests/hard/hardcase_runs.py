@@ -44,7 +44,7 @@ SCHEMES = {
     "Newmark-newton": lambda: nvib.Newmark(0.25, 0.5, iteration="newton"),
     "GaM-one_iteration": lambda: nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="one_iteration"),
     "GaM-newton": lambda: nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="newton"),
-    "PIM": lambda: nvib.PreciseIntegration(squarings=20, order=2, corrections=1),
+    "PIM": lambda: nvib.PreciseIntegration(squarings=20, interpolation=2, corrections=1),
     # modified Newton: one tangent per step (Newton's defaults otherwise)
     "Newmark-modified": lambda: nvib.Newmark(0.25, 0.5, iteration="modified"),
     "GaM-modified": lambda: nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="modified"),

@@ -16,7 +16,7 @@ VARIANTS = {
     "zhai": {"0.6": dict(psi=0.6, phi=0.6)},
     "newmark": {"one_iteration": dict(iteration="one_iteration")},
     "galpha": {"rho0.8-modified": ("from_rho_inf", 0.8, dict(iteration="modified"))},
-    "pim": {"order1": dict(order=1)},
+    "pim": {"interpolation1": dict(interpolation=1)},
 }
 
 

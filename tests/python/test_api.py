@@ -204,8 +204,8 @@ def test_effect_error_names_the_right_index():
     (lambda: nvib.GeneralizedAlpha.hht(-0.5), "alpha"),
     (lambda: nvib.GeneralizedAlpha.wbz(0.1), "alpha"),
     (lambda: nvib.GeneralizedAlpha.wbz(-1.5), "alpha"),
-    (lambda: nvib.PreciseIntegration(order=5), "order"),
-    (lambda: nvib.PreciseIntegration(order=0), "order"),
+    (lambda: nvib.PreciseIntegration(interpolation=5), "interpolation"),
+    (lambda: nvib.PreciseIntegration(interpolation=0), "interpolation"),
     (lambda: nvib.PreciseIntegration(squarings=0), "squarings"),
     (lambda: nvib.PreciseIntegration(corrections=-1), "corrections"),
 ])
@@ -246,7 +246,7 @@ def test_scheme_parameter_round_trip():
     assert nm.newton == nw and nvib.Newmark(0.3, 0.6, iteration="modified").newton == nvib.Newton(mode="modified")
     assert nvib.CEMDTS().eta == 0.45 and nvib.Zhai().psi == 0.5 and nvib.Zhai().phi == 0.5
     pim = nvib.PreciseIntegration()
-    assert (pim.squarings, pim.order, pim.corrections) == (20, 2, 1)
+    assert (pim.squarings, pim.interpolation, pim.corrections) == (20, 2, 1)
     assert nvib.CentralDifference().velocity == "synchronized"
 
 

@@ -293,3 +293,10 @@ def test_run_passes_the_progress_bar_to_solve(capsys, monkeypatch):
     assert run_cli(capsys, "run", "hardening", "--progress", "--t-end", "0.01")[0] == 0
     assert run_cli(capsys, "run", "hardening", "--no-progress", "--t-end", "0.01")[0] == 0
     assert isinstance(seen[0], ProgressBar) and seen[1] is None
+
+
+def test_renamed_scheme_option_is_refused_naming_the_new_one(capsys):
+    code, out, err = run_cli(capsys, "run", "hardening", "--scheme", "pim", "--order", "3")
+    assert code == 2 and "argument --order: renamed --interpolation (polynomial degree of the interpolation" in err
+    code, out, _ = run_cli(capsys, "run", "hardening", "--scheme", "pim", "--interpolation", "3")
+    assert code == 0 and "PreciseIntegration(squarings=20, interpolation=3, corrections=1)" in out

@@ -92,7 +92,7 @@ def test_explicit_one_force_evaluation_per_step(name, kind):
 @pytest.mark.parametrize("corrections", [0, 1, 2, 3])
 @pytest.mark.parametrize("order", [1, 2, 3])
 def test_pim_counts(order, corrections, kind):
-    s = stats_of(kind, nvib.PreciseIntegration(order=order, corrections=corrections))
+    s = stats_of(kind, nvib.PreciseIntegration(interpolation=order, corrections=corrections))
     assert s.num_force_evals == (1 + corrections) * N + 1
     assert s.num_expm == 1
     assert s.num_tangent_evals == 1

@@ -13,19 +13,19 @@ from _orders import LINEAR_DTS, LINEAR_T_END, C, K, M, V0, X0, check_declared_or
 @pytest.mark.parametrize("order, corrections, declared", [(1, 1, 2), (2, 1, 3), (3, 1, 3), (3, 2, 3), (2, 0, 2),
                                                           (1, 0, 2)])
 def test_declared_order(order, corrections, declared):
-    s = nvib.PreciseIntegration(order=order, corrections=corrections)
+    s = nvib.PreciseIntegration(interpolation=order, corrections=corrections)
     assert (s.order_u, s.order_v) == (declared, declared)
 
 
 @pytest.mark.parametrize("order", [1, 2, 3])
 def test_orders_on_the_forced_oscillator(order):
-    check_declared_orders(nvib.PreciseIntegration(order=order), "forced")
+    check_declared_orders(nvib.PreciseIntegration(interpolation=order), "forced")
 
 
 @pytest.mark.parametrize("order, refine", [(1, 0), (2, 0), (3, 2)])
 def test_orders_on_the_hardening_oscillator(order, refine):
     # interpolation 3 reaches its asymptotic order 3 later (3.18, 3.11, 3.06 starting 0, 1, 2 halvings down)
-    check_declared_orders(nvib.PreciseIntegration(order=order), "hardening", refine=refine)
+    check_declared_orders(nvib.PreciseIntegration(interpolation=order), "hardening", refine=refine)
 
 
 def test_without_corrector_second_order():
@@ -41,7 +41,7 @@ def test_exact_on_linear_models(order, damping):
     model = free_model(damping)
     c = 0.0 if damping == "none" else C
     for dt in (LINEAR_DTS[0], LINEAR_DTS[-1]):
-        res = nvib.solve(model, nvib.PreciseIntegration(order=order), dt=dt, t_end=LINEAR_T_END)
+        res = nvib.solve(model, nvib.PreciseIntegration(interpolation=order), dt=dt, t_end=LINEAR_T_END)
         xe, ve = nvib.exact.linear_sdof(res.t, m=M, k=K, c=c, x0=X0, v0=V0)
         ru = np.max(np.abs(res.u[:, 0] - xe)) / np.max(np.abs(xe))
         rv = np.max(np.abs(res.v[:, 0] - ve)) / np.max(np.abs(ve))

@@ -22,7 +22,7 @@ VARIANTS = {
     "zhai": [nvib.Zhai(0.6, 0.6)],
     "newmark": [nvib.Newmark(iteration="one_iteration"), nvib.Newmark(1 / 6, 0.5)],
     "galpha": [nvib.GeneralizedAlpha.from_rho_inf(0.8), nvib.GeneralizedAlpha.hht(-0.1)],
-    "pim": [nvib.PreciseIntegration(order=1, corrections=2)],
+    "pim": [nvib.PreciseIntegration(interpolation=1, corrections=2)],
 }
 
 

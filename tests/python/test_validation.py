@@ -40,7 +40,10 @@ SCHEME_CALLS = [
     (lambda: nvib.GeneralizedAlpha.wbz(-0.1, jacobian=3), TypeError, r"^jacobian: unknown parameter of "
                                                                       r"GeneralizedAlpha\.wbz"),
     (lambda: nvib.GeneralizedAlpha.wbz(-0.1, newton=nvib.Newton(jacobian=3)), TypeError, r"^jacobian: expected one of"),
-    (lambda: nvib.PreciseIntegration(order=2.0), TypeError, r"^order: expected an integer, got float"),
+    (lambda: nvib.PreciseIntegration(interpolation=2.0), TypeError, r"^interpolation: expected an integer, got float"),
+    (lambda: nvib.PreciseIntegration(order=3), TypeError, r"^order: renamed interpolation in PreciseIntegration "
+                                                          r"\(polynomial degree of the interpolation of the remainder "
+                                                          r"\(not the order of accuracy\)\): give interpolation=3$"),
     (lambda: nvib.PreciseIntegration(20), TypeError, r"^PreciseIntegration: takes at most 0 positional"),
     (lambda: nvib.PreciseIntegration(steps=3), TypeError, r"^steps: unknown parameter of PreciseIntegration"),
 ]
@@ -67,7 +70,7 @@ def test_scheme_classes_keep_their_behaviour():
         (nvib.GeneralizedAlpha.hht(-0.1), nvib._core.GeneralizedAlpha.hht(-0.1)),
         (nvib.GeneralizedAlpha.wbz(-0.2, newton=nvib.Newton(max_iter=5)),
          nvib._core.GeneralizedAlpha.wbz(-0.2, newton=nvib._core.Newton(max_iter=5))),
-        (nvib.PreciseIntegration(order=3, corrections=2), nvib._core.PreciseIntegration(order=3, corrections=2)),
+        (nvib.PreciseIntegration(interpolation=3, corrections=2), nvib._core.PreciseIntegration(interpolation=3, corrections=2)),
     ]
     model = nvib.Model([1.0], effects=[{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": 100.0, "a": 30.0}],
                        dofs=["x"], u0=[1.5])
@@ -80,7 +83,7 @@ def test_scheme_classes_keep_their_behaviour():
     ga = nvib.GeneralizedAlpha.from_rho_inf(0.8)
     core = nvib._core.GeneralizedAlpha.from_rho_inf(0.8)
     assert (ga.alpha_m, ga.alpha_f, ga.beta, ga.gamma) == (core.alpha_m, core.alpha_f, core.beta, core.gamma)
-    assert nvib.CEMDTS(np.float64(0.2)).eta == 0.2 and nvib.PreciseIntegration(order=np.int64(1)).order == 1
+    assert nvib.CEMDTS(np.float64(0.2)).eta == 0.2 and nvib.PreciseIntegration(interpolation=np.int64(1)).interpolation == 1
 
 
 @pytest.mark.parametrize("kwargs, error, match", [

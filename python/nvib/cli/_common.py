@@ -181,6 +181,8 @@ def add_scheme_options(group, *, iteration: bool = True) -> None:
             kw["type"] = real if opt["kind"] == "real" else integer
             kw["metavar"] = "X"
         group.add_argument(flag(name), dest=f"scheme_{name}", **kw)
+        if opt.get("formerly"):  # the old name of a renamed parameter: refused, naming the new one
+            group.add_argument(flag(opt["formerly"]), dest=f"renamed_{name}", metavar="X", help=argparse.SUPPRESS)
 
 
 def make_scheme(key: str, args, *, only_applicable: bool = False):
@@ -190,6 +192,9 @@ def make_scheme(key: str, args, *, only_applicable: bool = False):
 
     options = scheme_options()
     cls = schemes()[key]
+    for n, opt in options.items():
+        if opt.get("formerly") and getattr(args, f"renamed_{n}", None) is not None:
+            raise Usage(flag(opt["formerly"]), f"renamed {flag(n)} ({opt['doc']})")
     given = {n: getattr(args, f"scheme_{n}") for n in options if getattr(args, f"scheme_{n}", None) is not None}
     for n in list(given):
         if key not in options[n]["schemes"]:

@@ -39,7 +39,7 @@ def paper_schemes(half_step: bool = True) -> list:
             Newmark(0.25, 0.5, iteration="one_iteration"), Newmark(0.25, 0.5, iteration="newton"),
             GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="one_iteration"),
             GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="newton"),
-            PreciseIntegration(squarings=20, order=2, corrections=1)]
+            PreciseIntegration(squarings=20, interpolation=2, corrections=1)]
     return out
 
 

@@ -67,10 +67,16 @@ struct Int {
   const char* name;
   const char* doc;
   int lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
+  const char* formerly = nullptr;  // the parameter's previous name, refused with a message naming the new one
   constexpr Int range(int a, int b) const {
     Int r = *this;
     r.lo = a;
     r.hi = b;
+    return r;
+  }
+  constexpr Int renamed_from(const char* old) const {
+    Int r = *this;
+    r.formerly = old;
     return r;
   }
   bool contains(int x) const { return x >= lo && x <= hi; }

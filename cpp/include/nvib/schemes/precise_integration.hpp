@@ -15,7 +15,8 @@
 // free-floating vehicle) is fine. Each pass is one matrix-vector product with
 // the propagator folded with the interpolation weights.
 //
-// order p: polynomial degree of the interpolation (p + 1 points).
+// interpolation p: polynomial degree of the interpolation (p + 1 points). It is not the order of
+// accuracy (order_u below); the parameter was called `order` before, and that name is refused.
 // Predictor: extrapolation through r_n, r_{n-1}, ..; corrector: interpolation
 // through r(x~_{n+1}), r_n, r_{n-1}, ..; `corrections` corrector passes; the
 // history value r_{n+1} is evaluated at the corrected state (P(EC)^k E).
@@ -42,18 +43,21 @@ struct PreciseIntegration {
       "set-up is O(n^3) in the number of degrees of freedom.";
   static constexpr bool is_explicit = true;
   int squarings = 20;
-  int order = 2;
+  int interpolation = 2;
   int corrections = 1;
 
-  explicit PreciseIntegration(int squarings_ = 20, int order_ = 2, int corrections_ = 1)
-      : squarings(squarings_), order(order_), corrections(corrections_) {
+  explicit PreciseIntegration(int squarings_ = 20, int interpolation_ = 2, int corrections_ = 1)
+      : squarings(squarings_), interpolation(interpolation_), corrections(corrections_) {
     validate();
   }
 
   template <class Self, class V>
   static void parameters(Self& s, V&& v) {
     v(s.squarings, param::integer("squarings", "2^N squarings of the exponential").range(1, 60));
-    v(s.order, param::integer("order", "degree of the interpolation of the remainder").range(1, 3));
+    v(s.interpolation, param::integer("interpolation", "polynomial degree of the interpolation of the remainder "
+                                                       "(not the order of accuracy)")
+                              .range(1, 3)
+                              .renamed_from("order"));
     v(s.corrections, param::integer("corrections", "corrector passes per step").range(0, 10));
   }
   void validate() const { param::check_ranges(*this); }
@@ -61,26 +65,26 @@ struct PreciseIntegration {
     std::string parts;
     auto add = [&](const std::string& p) { parts += (parts.empty() ? "" : ", ") + p; };
     if (squarings != 20) add("N=" + std::to_string(squarings));
-    if (order != 2) add("order " + std::to_string(order));
+    if (interpolation != 2) add("interp. " + std::to_string(interpolation));
     if (corrections != 1) add(std::to_string(corrections) + " corr.");
     return parts.empty() ? "PIM" : "PIM(" + parts + ")";
   }
   // Interpolating with degree p gives order p + 1, up to 3: the first step,
   // with a constant predictor and a linear corrector, leaves an O(h^3) error.
   // Without a corrector the first step's constant extrapolation leaves O(h^2).
-  int order_u() const { return corrections > 0 ? std::min(order + 1, 3) : 2; }
+  int order_u() const { return corrections > 0 ? std::min(interpolation + 1, 3) : 2; }
   int order_v() const { return order_u(); }
   template <class M>
   using stepper = PreciseIntegrationStepper<M>;
 };
 
 // What PIM's dense set-up costs for n DOFs: the bytes of its propagators, moments and
-// workspace, and its flops (about 2 (q + 1) (2n)^3 per squaring, q = order + 1).
+// workspace, and its flops (about 2 (q + 1) (2n)^3 per squaring, q = interpolation + 1).
 struct PimCost {
   double bytes, flops;
 };
 inline PimCost pim_cost(Index n, const PreciseIntegration& s) {
-  const double N = 2.0 * static_cast<double>(n), q = s.order + 1.0;
+  const double N = 2.0 * static_cast<double>(n), q = s.interpolation + 1.0;
   const double propagators = 2.0 * q * N * (N + q * static_cast<double>(n));  // Ppred_, Pcorr_
   const double moments = 3.0 * (q + 1.0) * N * N;                            // exponential, moments, temporaries
   return {8.0 * (propagators + moments), 2.0 * (q + 1.0) * N * N * N * (s.squarings + 2.0)};
@@ -108,7 +112,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
  public:
   PreciseIntegrationStepper(const PreciseIntegration& scheme, ModelT model, double h)
       : Base(std::move(model), h), p_(scheme) {
-    const Index n = this->size(), N = 2 * n, q = p_.order + 1;
+    const Index n = this->size(), N = 2 * n, q = p_.interpolation + 1;
     if (n > kPimMaxDofs) {
       const PimCost c = pim_cost(n, p_);
       detail::throw_argument(
@@ -147,7 +151,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
 
   Status step() {
     const double t1 = this->next_time();
-    const Index n = this->size(), N = 2 * n, q = p_.order + 1;
+    const Index n = this->size(), N = 2 * n, q = p_.interpolation + 1;
     // z = [x_n; r_n; r_{n-1}; ..]: R_ is column-major, so its columns are the stacked history.
     z_.head(N) = x_;
     z_.tail(n * q) = Eigen::Map<const Vector>(R_.data(), n * q);
@@ -201,7 +205,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   //   x_{n+1} = T x_n + sum_k W_k c_k,  c = R L  =>  x_{n+1} = [T | W'_0 | W'_1 | ..] [x_n; r_0; r_1; ..]
   // with W'_j = sum_k L(j, k) W_k: one matrix-vector product per pass.
   void build_propagators(double t0) {
-    const Index n = this->size(), N = 2 * n, q = p_.order + 1;
+    const Index n = this->size(), N = 2 * n, q = p_.interpolation + 1;
     Matrix K0(n, n), C0(n, n);
     Vector zero = Vector::Zero(n);
     model_.tangent(zero, zero, t0, K0, C0, stats_);
