@@ -16,7 +16,7 @@ Schemes, with the paper's settings (PAPER.md): LCDM with synchronized and
 with half-step velocity (same displacements, different velocities); CEMDTS(0.45);
 Newmark(1/4, 1/2) and GαM = GeneralizedAlpha(1/2, 1/2, 1/4, 1/2), each in the
 one-iteration format (iteration 'one_iteration': one Newton iteration on the
-full residual per step, accepted as is) and with full Newton iteration; PIM (20 squarings, order 2, 1 correction).
+full residual per step, accepted as is) and with full Newton iteration; PIM (20 squarings, interpolation degree 2, 1 correction).
 
 Measures (one row per run):
 
@@ -70,7 +70,7 @@ def run_cases(cases=CASES, *, repeats: int = 3, outdir: str | None = None, progr
 
 
 def _write_csv(path: str, rows: list[dict], fields) -> None:
-    with open(path, "w", newline="") as fh:
+    with open(path, "w", encoding="utf-8", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(fields), extrasaction="ignore")
         w.writeheader()
         for r in rows:
@@ -193,7 +193,7 @@ def _summary(path: str, meta: dict, runs: list[dict], t1: list[dict], cpu: list[
             f"{name} {min(pr, key=lambda r: r[key])['eta']:.4g}" for key, name in
             (("energy_error", "energy error"), ("locus_error", "locus error"), ("state_error", "state error"))))
     parts.append("")
-    with open(path, "w") as fh:
+    with open(path, "w", encoding="utf-8") as fh:
         fh.write("\n".join(parts))
 
 
