@@ -150,3 +150,23 @@ def test_damped_models_exercise_the_velocity_path():
     assert np.max(np.abs(r1.v - r2.v)) > 1e-6 * np.max(np.abs(r2.v))
     undamped = run(chain(False), nvib.CentralDifference())
     assert np.max(np.abs(undamped.u - r2.u)) > 1e-6 * scale
+
+
+@pytest.mark.parametrize("scene, dt, t_end", [("hardening", 1e-3, 0.3), ("vehicle", 1e-3, 0.2),
+                                              ("building", 0.03, 3.0)])
+def test_incremental_paper_galpha_is_incremental_newmark(scene, dt, t_end):
+    """In the incremental format the equation at t_n is taken as satisfied and subtracted, so the step of
+    generalized-alpha with alpha_m = alpha_f is Newmark's divided by (1 - alpha_m): the paper's GaM
+    (1/2, 1/2, 1/4, 1/2) and Newmark(1/4, 1/2) take the same steps, to the last bit. Iterated, they differ
+    (the implicit midpoint rule against the trapezoidal rule), and so do other alphas."""
+    model = nvib.load_scene(scene)
+    newmark = nvib.solve(model, nvib.Newmark(0.25, 0.5, iteration="incremental"), dt=dt, t_end=t_end)
+    galpha = nvib.solve(model, nvib.GeneralizedAlpha(0.5, 0.5, 0.25, 0.5, iteration="incremental"), dt=dt,
+                        t_end=t_end)
+    np.testing.assert_array_equal(galpha.u, newmark.u)
+    np.testing.assert_array_equal(galpha.v, newmark.v)
+    iterated = [nvib.solve(model, cls(*args, iteration="one_iteration"), dt=dt, t_end=t_end).u
+                for cls, args in ((nvib.Newmark, (0.25, 0.5)), (nvib.GeneralizedAlpha, (0.5, 0.5, 0.25, 0.5)))]
+    assert np.max(np.abs(iterated[0] - iterated[1])) > 1e-3 * np.max(np.abs(iterated[0]))
+    other = nvib.solve(model, nvib.GeneralizedAlpha.from_rho_inf(0.8, iteration="incremental"), dt=dt, t_end=t_end)
+    assert np.max(np.abs(other.u - newmark.u)) > 1e-4 * np.max(np.abs(newmark.u))

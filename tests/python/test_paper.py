@@ -18,8 +18,9 @@ from nvib import paper
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 FIGURES = [c.key for c in paper.CASES] + ["table1_energy_error", "eta_study"]
 TABLES = ("runs.csv", "table1.csv", "cpu_time.csv", "eta_study.csv")
-PHASE_SCHEMES = ["LCDM", "LCDM (half-step v)", "CEMDTS(0.45)", "Newmark (one_iteration)", "Newmark (newton)",
-                 "GαM(0.5,0.5) (one_iteration)", "GαM(0.5,0.5) (newton)", "PIM"]
+PHASE_SCHEMES = ["LCDM", "LCDM (half-step v)", "CEMDTS(0.45)",
+                 "Newmark (incremental)", "Newmark (one_iteration)", "Newmark (newton)",
+                 "GαM(0.5,0.5) (incremental)", "GαM(0.5,0.5) (one_iteration)", "GαM(0.5,0.5) (newton)", "PIM"]
 HISTORY_SCHEMES = [s for s in PHASE_SCHEMES if s != "LCDM (half-step v)"]
 M, K0, A, X0 = 1.0, 100.0, 30.0, 1.5  # the hardening oscillator (section 4.2)
 
@@ -95,8 +96,14 @@ def test_cpu_time_table(out):
     cpu = {r["label"]: r for r in _rows(out, "cpu_time.csv")}
     for label, r in cpu.items():
         assert r["status"] == "success" and int(r["num_steps"]) == 100_000, label
-        assert 0 < float(r["wall_time"]) < 60 and int(r["repeats"]) >= 1
-        assert float(r["max_error"]) < 1e-5, label  # at 1e-4 s every scheme follows the building closely
+        assert float(r["wall_time"]) > 0 and int(r["repeats"]) >= 1  # measured (its size is benchmarks' business)
+        if "incremental" not in label:  # at 1e-4 s every iterated or explicit scheme follows the building closely
+            assert float(r["max_error"]) < 1e-5, label
+    # The incremental format is first order (its linearisation error is never corrected): its error at 1e-4 s
+    # is far above the iterated formats' (pin: measured 9.88e-5 for both, 74x Newton's 1.34e-6)
+    for family in ("Newmark", "GαM(0.5,0.5)"):
+        inc, newton = float(cpu[f"{family} (incremental)"]["max_error"]), float(cpu[f"{family} (newton)"]["max_error"])
+        assert 10 * newton < inc < 2e-4, family
     # one force evaluation per step and one at the start for the explicit schemes, two per step for PIM
     # (predictor and corrector), one per Newton iteration plus one per step for the implicit ones
     assert int(cpu["CEMDTS(0.45)"]["force_evals"]) == 100_001

@@ -11,9 +11,10 @@ from .cases import PAPER_ETA, Case, Setting, _fmt, _is_pendulum
 
 def _color(label: str) -> str:
     """One colour per scheme in every figure (grey is left to the reference)."""
-    order = ("LCDM", "LCDM (half-step v)", "CEMDTS", "Newmark (one_iteration)", "Newmark (newton)", "GαM(0.5,0.5) (one_iteration)",
+    order = ("LCDM", "LCDM (half-step v)", "CEMDTS", "Newmark (incremental)", "Newmark (one_iteration)",
+             "Newmark (newton)", "GαM(0.5,0.5) (incremental)", "GαM(0.5,0.5) (one_iteration)",
              "GαM(0.5,0.5) (newton)", "PIM")
-    colors = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C9")
+    colors = ("C0", "C1", "C2", "#8c0000", "C3", "C4", "#4d2600", "C5", "C6", "C9")
     for name, c in zip(order, colors):
         if label == name or (name == "CEMDTS" and label.startswith("CEMDTS")):
             return c
@@ -36,7 +37,8 @@ def _axis_labels(s: Setting) -> tuple[str, str, float]:
     return f"{s.dof} [m]", f"{s.dof}' [m/s]", 1.0
 
 
-def _grid(n: int, ncol: int = 4, width: float = 4.2, height: float = 3.6):
+def _grid(n: int, ncol: int | None = None, width: float = 4.2, height: float = 3.6):
+    ncol = ncol or (4 if n <= 8 else 5 if n <= 10 else 6)
     nrow = math.ceil(n / ncol)
     fig = _figure(width * ncol, height * nrow + 0.7)
     return fig, [fig.add_subplot(nrow, ncol, k + 1) for k in range(n)]
@@ -157,8 +159,10 @@ def plot_table1(rows: list[dict], path: str) -> None:
     labels = list(dict.fromkeys(r["scheme"] for r in rows))
     for k, lab in enumerate(labels):
         rr = sorted((r for r in rows if r["scheme"] == lab), key=lambda r: r["dt"])
-        ax.loglog([r["dt_over_tmin"] for r in rr], [r["energy_error"] for r in rr], ("o-", "s--", "^-.", "v:")[k % 4],
-                  color=_color(lab), lw=1.2, ms=4, label=lab)
+        # a marker and a dash per scheme: curves that coincide (LCDM and Newmark with Newton) stay visible
+        ax.loglog([r["dt_over_tmin"] for r in rr], [r["energy_error"] for r in rr],
+                  ("o", "s", "^", "v", "D", "P", "X", "<", ">", "*")[k % 10] + ("-", "--", "-.", ":")[k % 4],
+                  color=_color(lab), lw=1.2, ms=6 if k % 2 else 4, mfc="none" if k % 2 else None, label=lab)
     ax.axvline(1.0 / 20.0, color="0.4", lw=0.8, ls="--")
     ax.text(1.0 / 20.0, 1.0, " Δt = Tmin/20", transform=ax.get_xaxis_transform(), fontsize=8, va="top")
     ax.set_xlabel("Δt / Tmin  (Tmin = 2π / 82.76 rad/s = 75.9 ms)")
