@@ -6,9 +6,17 @@
 //   a_{n+1} = a(u_{n+1}, v*, t_{n+1})
 //   v_{n+1} = v_n + h [(1/2 - eta) a_{n+1} + (1/2 + 2 eta) a_n - eta a_{n-1}]
 //   a_{-1}  = a_0
-// Its displacements are the central-difference ones for every eta (so the
-// undamped stability limit is omega h < 2), eta = 0 is LCDM, eta = 1/2 is
-// Zhai(1/2, 1/2); the velocity corrector is third order at eta = 1/12.
+// The original formulas were not available. The reconstruction rests on what
+// the paper states of the method: explicit, built on two acceleration levels
+// (a_n and a_{n-1}, the "double time steps") with eta weighting the older one,
+// a predicted velocity in the force and a corrected one after it, and a
+// stability interval no smaller than LCDM's. Of the schemes of this stencil,
+// this is the one family whose displacements are the central-difference ones
+// for every eta (so the undamped stability limit is omega h < 2); eta = 0 is
+// LCDM, eta = 1/2 is Zhai(1/2, 1/2). At eta = 1/12 the velocity corrector is
+// third order locally (one-step error O(h^4)); globally the velocity stays
+// second order, being built from second-order displacements (measured on the
+// hardening oscillator: order 1.99, its error 7 % below LCDM's).
 #pragma once
 
 #include <string>
