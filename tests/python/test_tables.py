@@ -82,3 +82,21 @@ def test_missing_extra_names_it(result, monkeypatch):
     monkeypatch.delitem(__import__("sys").modules, "pandas", raising=False)
     with pytest.raises(ImportError, match=r'pip install "nvib\[pandas\]"'):
         result.to_pandas()
+
+
+def test_cli_out_writes_netcdf(tmp_path):
+    """nvib run --out FILE.nc writes netCDF through Result.save (or says which extra it needs)."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    out = tmp_path / "b.nc"
+    p = subprocess.run([sys.executable, "-m", "nvib", "run", "building", "--t-end", "0.5", "--out", str(out)],
+                       capture_output=True, text=True)
+    if importlib.util.find_spec("xarray") is None:
+        assert p.returncode == 2 and 'pip install "nvib[xarray]"' in p.stderr and not out.exists()
+        return
+    assert p.returncode == 0, p.stderr
+    back = nvib.load_result(out)
+    assert back.t[-1] == pytest.approx(0.5005) and back.dofs == [f"x{k}" for k in range(1, 7)]
+    assert back.units == ["m"] * 6 and back.relative_to_ground

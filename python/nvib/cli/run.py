@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
 import sys
 import time
@@ -10,6 +11,7 @@ from collections import Counter
 
 from . import _common as c
 
+OUT_FORMATS = (".npz", ".csv", ".nc")
 MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
 RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
              "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof"}
@@ -28,8 +30,6 @@ examples:
 
 def add_parser(sub) -> None:
     from .. import schemes
-    from .._io import FORMATS
-
     p = sub.add_parser("run", help="integrate a scene and summarise, save or plot the run",
                        usage="%(prog)s SCENE [--scheme NAME] [scheme parameters] [--dt DT] [--t-end T] "
                              "[--without NAME ...] [--dof NAME] [--energy] [--out FILE] [--plot PNG] [...]",
@@ -63,7 +63,8 @@ def add_parser(sub) -> None:
                    help="with --energy: stop as diverged once the energy balance error exceeds F times the energy "
                         "scale (default 0.5; 'inf': no check)")
     g = p.add_argument_group("output")
-    g.add_argument("--out", metavar="FILE", help=f"write the history to FILE{' or FILE'.join(FORMATS)}")
+    g.add_argument("--out", metavar="FILE", help=f"write the history to FILE{' or FILE'.join(OUT_FORMATS)} "
+                                                 "(.nc: netCDF, needs xarray)")
     g.add_argument("--plot", metavar="PNG", help="write histories, phase locus (and energy) to this PNG")
     g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar on stderr for runs over a second (default: when stderr is a terminal)")
@@ -94,7 +95,9 @@ def run(args) -> int:
     from .._progress import ProgressBar
 
     if args.out is not None:
-        c.check_output("--out", args.out, FORMATS)
+        c.check_output("--out", args.out, OUT_FORMATS)
+        if args.out.lower().endswith(".nc") and importlib.util.find_spec("xarray") is None:
+            raise c.Usage("--out", 'a .nc file needs xarray, which is not installed: pip install "nvib[xarray]"')
     if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     scheme = c.make_scheme(args.scheme, args)
@@ -176,8 +179,11 @@ def write_out(res, model, t_end: float, save_every: int, args) -> bool:
     from .. import save_result
 
     try:
-        save_result(args.out, res, {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
-                                    "without": np.array(list(args.without or []), dtype=str)})
+        if args.out.lower().endswith(".nc"):
+            res.save(args.out)  # netCDF through xarray (checked to be there before the run)
+        else:
+            save_result(args.out, res, {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
+                                        "without": np.array(list(args.without or []), dtype=str)})
     except OSError as exc:
         print(f"nvib run: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
         return False
