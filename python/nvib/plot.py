@@ -100,7 +100,7 @@ def _status_note(result) -> str | None:
     if result.success:
         return None
     what = {"diverged": "diverged", "newton_failed": "Newton failed",
-            "singular_matrix": "singular iteration matrix"}.get(result.status.name, result.status.name)
+            "singular_matrix": "singular iteration matrix", "interrupted": "interrupted"}.get(result.status.name, result.status.name)
     f = result.failure
     where = f" at t = {f.t:g} s (step {f.step})" if f is not None else ""
     return f"{what}{where}: partial history"

@@ -52,19 +52,21 @@ def test_sigint_stops_a_long_cpp_only_solve(scheme, python_sigint_handler):
     # 1e13 steps: days of work, so only the interrupt can end it
     model = hardening()  # before the timer starts: a failure here must not leave a signal in flight
     sent = interrupt_after(DELAY)
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt) as info:
         nvib.solve(model, scheme, dt=1e-3, t_end=1e10, save_every=10**12)
-    stopped = time.perf_counter()
     assert "at" in sent
-    assert stopped - sent["at"] < 5.0, f"stopped {stopped - sent['at']:.2f} s after the signal"
+    # stopped inside the C++ loop, which hands over the steps it took: some, far fewer than 1e13
+    steps = info.value.result.stats.num_steps
+    assert 0 < steps < 10**12, steps
 
 
 def test_sigint_stops_stepper_integrate_and_the_stepper_stays_usable(python_sigint_handler):
     st = nvib.Stepper(hardening(), nvib.CEMDTS(), 1e-3)  # before the timer starts
     sent = interrupt_after(DELAY)
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt) as info:
         st.integrate(1e10, save_every=10**12)
-    assert time.perf_counter() - sent["at"] < 5.0
+    assert "at" in sent
+    assert 0 < info.value.result.stats.num_steps < 10**12
     # the stepper holds the state reached when the run stopped, and continues from it
     t = st.t
     assert t > 0.0
@@ -73,34 +75,35 @@ def test_sigint_stops_stepper_integrate_and_the_stepper_stays_usable(python_sigi
 
 
 @pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs POSIX signals")
-def test_sigint_stops_a_run_whose_steps_take_a_second_within_one_step(python_sigint_handler):
+def test_sigint_stops_a_run_whose_steps_take_a_second(python_sigint_handler):
     """Signals are polled on a clock (about every 50 ms of work, and at every factorisation), not every
     few thousand steps: a 160,000-DOF lattice whose Newmark steps take about a second (two sparse
-    factorisations each) stops within one step of Ctrl-C."""
+    factorisations each) stops long before the end of its 1000 steps. How soon after the signal it
+    stops is not asserted: that would be a bound on wall time."""
     model = nvib.scenes.lattice(400, 400)
     u0 = np.full(model.n, 1e-3)
-    st = nvib.Stepper(model, nvib.Newmark(), 1e-3, u0=u0)
     t = time.perf_counter()
-    st.step()
-    step = time.perf_counter() - t
+    nvib.Stepper(model, nvib.Newmark(), 1e-3, u0=u0).step()
+    step = time.perf_counter() - t  # only to send the signal after the first steps
     sent = interrupt_after(max(1.0, 1.5 * step))
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt) as info:
         nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=1.0, u0=u0, save_every=10**6)
-    stopped = time.perf_counter()
     assert "at" in sent
-    assert stopped - sent["at"] < step + 0.5, f"stopped {stopped - sent['at']:.2f} s after the signal; a step {step:.2f} s"
+    steps = info.value.result.stats.num_steps
+    assert steps < 1000 and info.value.result.stats.num_factorizations >= 1, steps
 
 
 def test_sigint_stops_the_set_up_of_precise_integration(python_sigint_handler):
-    """PIM's dense set-up (O(n^3), tens of seconds at 600 DOFs) polls between its matrix products."""
+    """PIM's dense set-up (O(n^3), tens of seconds at 600 DOFs) polls between its matrix products.
+    Stopped in the set-up, the run has taken no step and no history comes with the KeyboardInterrupt;
+    had the set-up not polled, the signal would have been taken in the 10^4 steps after it (seconds
+    of dense products), and the interrupt would carry the steps taken as ``result``."""
     model = nvib.scenes.chain(600)
     sent = interrupt_after(DELAY)
-    t = time.perf_counter()
-    with pytest.raises(KeyboardInterrupt):
-        nvib.solve(model, nvib.PreciseIntegration(), dt=1e-3, t_end=0.01)
-    stopped = time.perf_counter()
-    assert "at" in sent and stopped - t < 10.0
-    assert stopped - sent["at"] < 2.0, f"stopped {stopped - sent['at']:.2f} s after the signal"
+    with pytest.raises(KeyboardInterrupt) as info:
+        nvib.solve(model, nvib.PreciseIntegration(), dt=1e-3, t_end=10.0, save_every=10**6)
+    assert "at" in sent
+    assert not hasattr(info.value, "result"), info.value.result.stats
 
 
 def _check_partial(res, dt: float, save_every: int) -> None:
@@ -109,6 +112,11 @@ def _check_partial(res, dt: float, save_every: int) -> None:
     np.testing.assert_allclose(res.t, dt * save_every * np.arange(len(res.t)), rtol=1e-12, atol=1e-15)
     assert np.all(np.isfinite(res.u)) and res.stats.num_steps >= (len(res.t) - 1) * save_every
     assert res.units == ["m"] and res.stats.wall_time > 0.0
+    # it does not claim success: the status says it was interrupted, the failure where
+    assert res.status == nvib.Status.interrupted and not res.success
+    f = res.failure
+    assert f.status == nvib.Status.interrupted and f.t == res.t[-1] and f.step > res.stats.num_steps - 1
+    assert f.message.startswith(f"interrupted after step {f.step - 1} of ") and f"saved up to t = {res.t[-1]:g}" in f.message
 
 
 @pytest.mark.parametrize("via", ["solve", "stepper"])

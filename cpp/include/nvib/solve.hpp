@@ -402,6 +402,14 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   } catch (...) {
     if (!opt.keep_partial) throw;
     finish();
+    res.status = Status::interrupted;
+    res.failure = Failure{};
+    res.failure.status = Status::interrupted;
+    res.failure.step = done + 1;  // the step under way (a step the interrupt hook stopped after is complete)
+    res.failure.t = row > 0 ? res.t[row - 1] : st.time();
+    res.failure.message = "interrupted after step " + std::to_string(done) + " of " + std::to_string(nsteps) +
+                          "; the history is saved up to t = " +
+                          (row > 0 ? detail::fmt(res.t[row - 1]) : std::string("the start"));
     throw PartialRun{std::move(res), std::current_exception()};
   }
   observe(done, nsteps);  // once at the end too, however short the run

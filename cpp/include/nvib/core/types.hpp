@@ -63,7 +63,9 @@ struct Stats {
   }
 };
 
-enum class Status { success, diverged, newton_failed, singular_matrix };
+// interrupted: an exception (an interrupt, an error raised by the force or the observer) stopped the
+// run; it reaches the caller as itself, or as a PartialRun carrying the history (SolveOptions::keep_partial).
+enum class Status { success, diverged, newton_failed, singular_matrix, interrupted };
 
 inline const char* to_string(Status s) {
   switch (s) {
@@ -71,6 +73,7 @@ inline const char* to_string(Status s) {
     case Status::diverged: return "diverged";
     case Status::newton_failed: return "newton_failed";
     case Status::singular_matrix: return "singular_matrix";
+    case Status::interrupted: return "interrupted";
   }
   return "unknown";
 }
