@@ -77,8 +77,9 @@ int main() {
     double pu = 0, pv = 0;
     fitted_orders(s, pu, pv);
     std::printf("%-20s declared u %d v %d, fitted u %.3f v %.3f\n", S::name, s.order_u(), s.order_v(), pu, pv);
-    CHECK_CLOSE(pu, s.order_u(), 0.15);
-    CHECK_CLOSE(pv, s.order_v(), 0.15);
+    // Measured: u 2.000 for every second-order scheme, v 1.986 (Zhai) to 2.000; PIM u 2.994, v 3.001.
+    CHECK_CLOSE(pu, s.order_u(), 0.1);
+    CHECK_CLOSE(pv, s.order_v(), 0.1);
   });
   CHECK(count == static_cast<int>(nvib::AllSchemes::size));
   return nvib_test::finish("test_registry");

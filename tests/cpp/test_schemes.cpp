@@ -136,7 +136,13 @@ int main() {
         fitted_order(nvib::Newmark(0.25, 0.5, one_iteration()), c),
         fitted_order(nvib::GeneralizedAlpha(), c),
         fitted_order(nvib::GeneralizedAlpha::from_rho_inf(0.6), c)};
-    for (int i = 0; i < 8; ++i) CHECK_CLOSE(orders[i], 2.0, 0.1);
+    const char* names[] = {"CentralDifference", "Zhai", "CEMDTS(0.45)", "CEMDTS(1/12)", "Newmark",
+                           "Newmark one_iteration", "GeneralizedAlpha", "GeneralizedAlpha(0.6)"};
+    // Measured: 1.999 to 2.000 undamped, 1.999 to 2.009 damped.
+    for (int i = 0; i < 8; ++i) {
+      std::printf("c = %g, %-22s fitted order %.3f\n", c, names[i], orders[i]);
+      CHECK_CLOSE(orders[i], 2.0, 0.1);
+    }
     // PIM on a linear model: the exponential is exact.
     CHECK(max_error(nvib::PreciseIntegration(), 0.05, c) < 1e-12);
   }

@@ -86,24 +86,18 @@ def errors(problem: str, scheme, *, refine: int = 0) -> tuple[np.ndarray, np.nda
     return np.array(eu), np.array(ev), dts
 
 
-def check_declared_orders(scheme, problem: str, *, refine: int = 0, further: int = 3) -> None:
+def check_declared_orders(scheme, problem: str, *, refine: int = 0) -> None:
     """The fitted orders of u and v equal the scheme's declared order_u and order_v to ORDER_TOL.
 
-    The fit is over four step sizes, refine halvings below the problem's own. Where it misses, the
-    window moves one halving finer, up to ``further`` times, while the errors stay far above
-    round-off: the orders must then hold on the finest window reached (a pre-asymptotic scheme gets
-    there; a wrongly declared order does not, since the fit tends to the true order)."""
-    for k in range(refine, refine + further + 1):
-        eu, ev, dts = errors(problem, scheme, refine=k)
-        assert eu[-1] > 1e-10 and ev[-1] > 1e-10, f"{scheme!r} on {problem}: errors at round-off {eu}, {ev}"
-        pu, pv = slope(dts, eu), slope(dts, ev)
-        if abs(pu - scheme.order_u) <= ORDER_TOL and abs(pv - scheme.order_v) <= ORDER_TOL:
-            return
-        if min(eu[-1], ev[-1]) < 1e-8:  # one more halving would reach round-off
-            break
+    The fit is over four step sizes, refine halvings below the problem's own. There is no search for
+    a window that passes: a scheme whose asymptotic regime starts later is given a larger refine by
+    its test, with the fitted orders measured at the coarser windows quoted in a comment there."""
+    eu, ev, dts = errors(problem, scheme, refine=refine)
+    assert eu[-1] > 1e-10 and ev[-1] > 1e-10, f"{scheme!r} on {problem}: errors at round-off {eu}, {ev}"
+    pu, pv = slope(dts, eu), slope(dts, ev)
     assert abs(pu - scheme.order_u) <= ORDER_TOL, \
         f"{scheme!r} on {problem}: displacement order {pu:.3f}, declared {scheme.order_u}; errors {eu} " \
-        f"({k - refine} halvings further)"
+        f"(refine {refine})"
     assert abs(pv - scheme.order_v) <= ORDER_TOL, \
         f"{scheme!r} on {problem}: velocity order {pv:.3f}, declared {scheme.order_v}; errors {ev} " \
-        f"({k - refine} halvings further)"
+        f"(refine {refine})"

@@ -60,7 +60,7 @@ def test_balance_error_order_building():
     b = nvib.load_scene("building")
     dts = [4e-4, 2e-4, 1e-4]
     errs = [run(b, nvib.CEMDTS(), dt, 10.0, save_every=50).energy.relative_balance_error() for dt in dts]
-    assert 1.8 <= fitted_order(dts, errs) <= 2.2, errs
+    assert abs(fitted_order(dts, errs) - 2.0) <= 0.1, errs  # measured 2.002
 
 
 @pytest.mark.parametrize("scheme", [nvib.CEMDTS(), nvib.Newmark(), nvib.CentralDifference(), nvib.GeneralizedAlpha()],
@@ -69,7 +69,8 @@ def test_balance_error_order_hardening(scheme):
     h = nvib.load_scene("hardening")
     dts = [1e-4, 5e-5, 2.5e-5]
     errs = [run(h, scheme, dt, 0.3).energy.relative_balance_error() for dt in dts]
-    assert 1.8 <= fitted_order(dts, errs) <= 2.2, errs
+    # measured 2.002 (CEMDTS), 2.000 (Newmark, CentralDifference, GeneralizedAlpha)
+    assert abs(fitted_order(dts, errs) - 2.0) <= 0.1, errs
 
 
 def every_effect_model(irregularity):
@@ -91,21 +92,55 @@ def every_effect_model(irregularity):
     return nvib.Model([1.0, 2.0, 1.5], effects=eff, dofs=["a", "b", "c"], u0=[0.05, -0.1, 0.1], v0=[0.3, 0.0, -0.2])
 
 
-@pytest.mark.parametrize("irregularity", [
-    {"kind": "sine", "amplitude": 0.02, "omega": 9.0},
-    {"kind": "table", "t": [0.0, 1.0, 2.0, 3.0, 4.0], "values": [0.0, 0.02, -0.01, 0.03, 0.0]},
-], ids=["sine", "table"])
-@pytest.mark.parametrize("scheme", [nvib.CEMDTS(), nvib.Newmark(), nvib.CentralDifference()], ids=lambda s: type(s).__name__)
-def test_balance_with_every_effect_type(irregularity, scheme):
-    m = every_effect_model(irregularity)
-    dts = [4e-4, 2e-4, 1e-4]
+IRREGULARITIES = {
+    "sine": {"kind": "sine", "amplitude": 0.02, "omega": 9.0},
+    # piecewise linear: its slope jumps at t = 1, 2, 3, 4 s, which fall on steps
+    "table": {"kind": "table", "t": [0.0, 1.0, 2.0, 3.0, 4.0], "values": [0.0, 0.02, -0.01, 0.03, 0.0]},
+}
+BALANCE_SCHEMES = [nvib.CEMDTS(), nvib.Newmark(), nvib.CentralDifference()]
+
+
+def balance_errors(irregularity: str, scheme, dts=(4e-4, 2e-4, 1e-4)):
+    """The relative balance errors of the every-effect model at each step, and the last run's energy."""
+    m = every_effect_model(IRREGULARITIES[irregularity])
     errs = []
     for dt in dts:
         e = run(m, scheme, dt, 5.0, save_every=10).energy
         errs.append(e.relative_balance_error())
+    return list(dts), errs, e
+
+
+@pytest.mark.parametrize("irregularity", list(IRREGULARITIES))
+@pytest.mark.parametrize("scheme", BALANCE_SCHEMES, ids=lambda s: type(s).__name__)
+def test_balance_with_every_effect_type(irregularity, scheme):
+    _, errs, e = balance_errors(irregularity, scheme)
     assert e.dissipated[-1] > 1.0 and np.all(np.diff(e.dissipated) >= -1e-15)
     assert errs[-1] < 1e-4
-    assert 1.8 <= fitted_order(dts, errs) <= 2.2, errs
+
+
+# Fitted orders of the balance error at dt = 4e-4, 2e-4, 1e-4 s (then 2e-4 to 5e-5, 1e-4 to 2.5e-5):
+#   sine:  CEMDTS 1.985 (1.986, 2.001), Newmark 1.976 (2.051, 2.000), CentralDifference 2.026 (1.957, 2.000)
+#   table: CEMDTS 1.976 (1.980, 2.002), Newmark 2.059 (2.065, 2.015),
+#          CentralDifference 1.875 (1.786, 1.713; 1.585 from 5e-5 to 1.25e-5)
+# CentralDifference on the table profile is not second order: its order falls towards 1 as the step
+# shrinks. The balance error there has a first-order part from the slope jump at t = 4 s (the error
+# gained between t = 4 and 4.5 s, 1.3e-4, 6.4e-5, 3.1e-5 at dt = 1e-4, 5e-5, 2.5e-5, halves per halving
+# of the step, where the error gained before t = 4 s quarters). Moving the last point off the
+# steps (4 + 1.3e-5 s) gives 1.903, 1.885, 2.061; adding a point (6 s, 0) gives 1.956, 1.971, 1.977
+# for CentralDifference but 1.951, 1.863, 1.695 for Newmark. Expected to fail until the work of a
+# profile with slope jumps on a step is integrated to second order.
+ORDER_CASES = [pytest.param(irr, s, id=f"{irr}-{type(s).__name__}",
+                            marks=[pytest.mark.xfail(strict=True, raises=AssertionError,
+                                                     reason="balance error order 1.875 (measured), falling "
+                                                            "with the step: first order at the slope jump")]
+                            if (irr, type(s).__name__) == ("table", "CentralDifference") else [])
+               for irr in IRREGULARITIES for s in BALANCE_SCHEMES]
+
+
+@pytest.mark.parametrize("irregularity, scheme", ORDER_CASES)
+def test_balance_error_order_with_every_effect_type(irregularity, scheme):
+    dts, errs, _ = balance_errors(irregularity, scheme)
+    assert abs(fitted_order(dts, errs) - 2.0) <= 0.1, errs
 
 
 # ---------------------------------------------------------------------------
@@ -230,7 +265,7 @@ def test_work_of_a_moving_rail():
     scale = np.max(e.kinetic + e.potential)
     assert np.max(np.abs(rail_work)) > 0.1 * scale
     assert errs[-1] < 1e-8
-    assert 1.8 <= fitted_order([4e-5, 2e-5, 1e-5], errs) <= 2.2, errs
+    assert abs(fitted_order([4e-5, 2e-5, 1e-5], errs) - 2.0) <= 0.1, errs  # measured 2.000
 
 
 def test_dissipated_energy_of_a_linear_damper():

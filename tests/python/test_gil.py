@@ -1,5 +1,5 @@
 """The GIL is released while a C++-only model integrates: another Python
-thread keeps running at the pace it has when the main thread merely sleeps."""
+thread keeps running meanwhile."""
 
 import threading
 import time
@@ -36,12 +36,12 @@ def _ticks_during(run) -> tuple[int, float]:
 def test_cpp_only_model_releases_the_gil():
     model = nvib.Model([1.0], effects=HARD, dofs=["x"], u0=[1.5])
     ticks, duration = _ticks_during(
-        lambda: nvib.solve(model, nvib.CEMDTS(), dt=1e-6, t_end=4.0, save_every=1_000_000))
-    # Calibration: the same thread while the main thread sleeps (GIL free) for as long.
-    free, free_duration = _ticks_during(lambda: time.sleep(duration))
-    rate, free_rate = ticks / duration, free / free_duration
-    # Holding the GIL would leave the counter at a handful of turns at most.
-    assert rate > 0.2 * free_rate, (ticks, duration, free, free_duration)
+        lambda: nvib.solve(model, nvib.CEMDTS(), dt=1e-6, t_end=8.0, save_every=1_000_000))
+    # A count of the other thread's turns, not a rate: measured 2100 to 2300 turns during the 8e6 steps
+    # (0.19 s).
+    # Holding the GIL would leave it at a handful at most (a model with a Python force, which hands the
+    # GIL over between its calls, measured 12 turns in 2e4 steps).
+    assert ticks > 200, (ticks, duration)
 
 
 def test_python_callable_model_reports_its_force_calls():

@@ -85,11 +85,13 @@ def test_newton_converges_quadratically(name, model):
                 assert r[k + 1] <= C * r[k] ** 2, f"step {step}: r = {r}, pair {k}: C bound {C:.2e}"
         for k in range(2, len(r) - 1):
             # order estimate inside the asymptotic regime: leave out the predictor's
-            # residual r_0 (the first iteration removes the linear mismatch wholesale)
+            # residual r_0 (the first iteration removes the linear mismatch wholesale).
+            # Measured over the 30 steps: 1.945 to 2.050 (Newmark, 20 estimates), 1.999 to 2.003
+            # (paper's GaM, 12), 1.999 to 2.006 (GaM rho_inf 0.8, 14), the same for both models.
             if r[k + 1] > floor:
                 n_triplets += 1
                 p = math.log(r[k + 1] / r[k]) / math.log(r[k] / r[k - 1])
-                assert p >= 1.8, f"step {step}: r = {r}, order estimate {p:.2f} at k = {k}"
+                assert abs(p - 2.0) <= 0.1, f"step {step}: r = {r}, order estimate {p:.3f} at k = {k}"
         # converged: the last residual is tiny compared with the first
         assert r[-1] <= 1e-9 * r[0]
     assert n_pairs >= 2 * NSTEPS and n_triplets >= 5, (n_pairs, n_triplets)
@@ -112,6 +114,11 @@ def test_modified_newton_converges_linearly(name):
         assert max(ratios) < 1.0
         tail = ratios[-3:]
         assert min(tail) > 1e-3 and max(tail) / min(tail) < 5.0, f"step {step + 1}: ratios {ratios}"
+        # order estimate log(r_k+1 / r_k) / log(r_k / r_k-1), as for full Newton: 1 for a linear
+        # contraction. Measured 0.980 to 1.067 over the five steps of the three schemes.
+        orders = [math.log(r[k + 1] / r[k]) / math.log(r[k] / r[k - 1]) for k in range(2, len(r) - 1)
+                  if r[k + 1] > floor]
+        assert all(abs(p - 1.0) <= 0.1 for p in orders), f"step {step + 1}: r = {r}, order estimates {orders}"
     assert st.stats.num_factorizations == 5
     assert st.stats.num_newton_iters > 5 * 3
 

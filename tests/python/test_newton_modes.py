@@ -103,8 +103,11 @@ def test_quadratic_convergence():
         r = np.array(st.last_residuals) / (K0 * (1.0 + A * X0 ** 2) * X0)
         r = r[r > 1e-13]  # above round-off
         assert len(r) >= 3, (cls, r)
-        rates = np.log(r[2:]) / np.log(r[1:-1])
-        assert np.all(rates > 1.8), (cls, r, rates)
+        # Order estimate log(r_k+1 / r_k) / log(r_k / r_k-1): measured 1.993 (Newmark, r = 10.3, 1.26e-2,
+        # 1.97e-8) and 1.997 (GeneralizedAlpha, r = 5.24, 3.20e-3, 1.22e-9). The ratio log r_k+1 / log r_k
+        # checked before (> 1.8) measured 4.06 and 3.57: it is not the order unless the constant is 1.
+        orders = np.log(r[2:] / r[1:-1]) / np.log(r[1:-1] / r[:-2])
+        assert np.all(np.abs(orders - 2.0) <= 0.1), (cls, r, orders)
 
 
 def test_tangent_evaluations_per_mode():

@@ -12,6 +12,9 @@ import nvib
 from _orders import check_declared_orders
 
 
+# Fitted u/v orders at the problems' own steps (forced; hardening): lcdm 2.010/2.007; 2.000/2.003,
+# cemdts and zhai 2.010/1.992; 2.000/1.992, newmark 2.000/2.000; 2.000/2.004, galpha 2.000/2.000;
+# 2.000/2.004, pim (declared 3) 3.002/3.003; 2.997/3.004.
 @pytest.mark.parametrize("problem", ["forced", "hardening"])
 def test_declared_orders(scheme_class, problem):
     check_declared_orders(scheme_class(), problem)

