@@ -2,26 +2,16 @@
 CMake project, built against the headers and config installed by pip."""
 
 import os
-import shutil
 import subprocess
 import sys
 
-import pytest
 
 import nvib
 
+import _build_tools
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONSUMER = os.path.join(os.path.dirname(HERE), "cmake_consumer")
-
-
-def _cmake() -> str:
-    exe = shutil.which("cmake")
-    if exe is None:  # the PyPI cmake package puts it beside the interpreter
-        cand = os.path.join(os.path.dirname(sys.executable), "cmake")
-        exe = cand if os.path.exists(cand) else None
-    if exe is None:
-        pytest.fail("cmake not found: install the test extras (pip install .[test])")
-    return exe
 
 
 def test_installed_tree_has_headers_and_config():
@@ -36,7 +26,7 @@ def test_cli_prints_cmake_dir():
 
 
 def test_find_package_consumer_builds_and_runs(tmp_path):
-    cmake = _cmake()
+    cmake = _build_tools.cmake()
     build = tmp_path / "build"
     cfg = subprocess.run([cmake, "-S", CONSUMER, "-B", str(build), f"-Dnvib_DIR={nvib.cmake_dir()}",
                           "-DCMAKE_BUILD_TYPE=Release"], capture_output=True, text=True)

@@ -24,6 +24,8 @@ import pytest
 
 import nvib
 
+import _build_tools
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 PYPROJECT = ROOT / "pyproject.toml"
@@ -44,16 +46,6 @@ def _pyproject() -> dict:
         import tomli as tomllib
     with open(PYPROJECT, "rb") as fh:
         return tomllib.load(fh)
-
-
-def _cmake() -> str:
-    exe = shutil.which("cmake")
-    if exe is None:  # the PyPI cmake package puts it beside the interpreter
-        cand = os.path.join(os.path.dirname(sys.executable), "cmake")
-        exe = cand if os.path.exists(cand) else None
-    if exe is None:
-        pytest.fail("cmake not found: install the test extras (pip install .[test])")
-    return exe
 
 
 # ---- sdist -------------------------------------------------------------------------
@@ -140,7 +132,7 @@ def test_wheel_build_cache_survives_a_new_build_environment(tmp_path):
     object file lives outside CMakeFiles/. Configure as a wheel build does, from
     one environment, clear as scikit-build-core does, configure from another."""
     _source_checkout()
-    cmake = _cmake()
+    cmake = _build_tools.cmake()
     pybind11 = pytest.importorskip("pybind11", reason="pybind11 (a build requirement) is not installed")
     cmeel_prefix = None
     for entry in sys.path:
