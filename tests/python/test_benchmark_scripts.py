@@ -1,0 +1,23 @@
+"""Every benchmark script still starts: it imports what it uses from nvib and parses its options
+(`--help`), so a renamed module or parameter breaks a test rather than the next measurement."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BENCHMARKS = os.path.join(ROOT, "benchmarks")
+SCRIPTS = sorted(f for f in os.listdir(BENCHMARKS) if f.endswith(".py")) if os.path.isdir(BENCHMARKS) else []
+
+
+@pytest.mark.skipif(not SCRIPTS, reason="not a source checkout (no benchmarks/ folder)")
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_benchmark_script_starts(script):
+    p = subprocess.run([sys.executable, os.path.join(BENCHMARKS, script), "--help"], capture_output=True,
+                       text=True, timeout=300, cwd=BENCHMARKS)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "usage:" in p.stdout and "Traceback" not in p.stderr
