@@ -96,8 +96,11 @@ def interrupted_run(tmp_path_factory):
     if not hasattr(signal, "SIGINT") or os.name != "posix":
         pytest.skip("needs POSIX signals")
     out = tmp_path_factory.mktemp("interrupt") / "run.npz"
+    # SIGINT at its default disposition in the child, as in a terminal: a test runner started in the background
+    # by a shell ignores it, the child would inherit that, and Python then leaves Ctrl-C ignored
     p = subprocess.Popen([sys.executable, "-m", "nvib", "run", "hardening", "--t-end", str(T_END), "--progress",
-                          "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env())
+                          "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=_env(),
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     err = bytearray()
     started = threading.Event()
 
