@@ -280,13 +280,6 @@ def main() -> int:
             print(f"{name} ...", file=sys.stderr)
             results[name] = run_scene(name, SCENES[name], exes, args, tmp)
         cpu = None if args.no_cpu_table else cpu_time_table(exes, args.cpu_rounds, args.repeats)
-    try:
-        import openseespy.opensees  # noqa: F401
-
-        opensees = "importable, but no OpenSees peer is written (see the notes)"
-    except ImportError as exc:
-        opensees = f"not importable here ({exc}); skipped"
-
     lines = ["# Accuracy against cost", ""] + machine_info(args.cxx, load) + [
         f"- whole run: {time.perf_counter() - started:.0f} s" + (" (--quick)" if args.quick else ""), ""]
     lines += [
@@ -310,7 +303,8 @@ def main() -> int:
         "- **Energy error**: nvib's energy balance (`Result.energy.relative_balance_error()`), in "
         "`cost_rows.csv`; the SciPy rows have it only for the conservative scenes (pendulum, hardening).",
         "- nvib runs with more than 1,000,000 steps (explicit schemes) or 300,000 steps (the others) are not made.",
-        f"- OpenSeesPy: {opensees}.", ""]
+        "- OpenSees: not in this comparison; the building side by side with OpenSees 3.7.1 is "
+        "`benchmarks/opensees.py` (`opensees.md`).", ""]
     if cpu is not None or any(n in results for n in ("building", "vehicle")):
         lines += ["## Targets", ""]
     if any(n in results for n in ("building", "vehicle")):
