@@ -123,11 +123,12 @@ def test_balance_with_every_effect_type(irregularity, scheme):
 #   table: CEMDTS 1.976 (1.980, 2.002), Newmark 2.059 (2.065, 2.015),
 #          CentralDifference 1.875 (1.786, 1.713; 1.585 from 5e-5 to 1.25e-5)
 # The table profile's slope jumps at t = 1, 2, 3, 4 s, on steps of every dt here: the trapezoidal rule for
-# the rail's work gets the mean of the two one-sided slopes there (its value at a step point is weighed
-# half by each neighbouring step). With either one-sided slope CentralDifference measured 1.875, 1.786,
-# 1.713, 1.585 as the step shrank (first order at the kinks); with the mean, from 4e-4 s down to 2.5e-5 s:
-# CentralDifference 1.919, 1.992, 1.949, 2.006; CEMDTS 1.994, 1.957, 2.002, 2.001; Newmark 2.007, 1.997,
-# then 1.905, 1.733 below the steps tested here.
+# the rail's work takes the slope from the left as a step ends there and from the right as the next one
+# starts. With one slope for both CentralDifference measured 1.875, 1.786, 1.713, 1.585 as the step shrank
+# (first order at the kinks); with their mean for both, Newmark's largest balance error was the O(h) one
+# at the kink's own instant (2.007, 1.997, 1.905, 1.733). Now, from 4e-4 s down to 2.5e-5 s:
+# CentralDifference 1.919, 1.992, 1.949, 2.006; CEMDTS 1.994, 1.957, 2.002, 2.001; Newmark 2.046, 2.074,
+# 2.053, 1.977.
 ORDER_CASES = [pytest.param(irr, s, id=f"{irr}-{type(s).__name__}")
                for irr in IRREGULARITIES for s in BALANCE_SCHEMES]
 

@@ -274,7 +274,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   double p_in = 0.0, p_diss = 0.0, work = 0.0, diss = 0.0, e0 = 0.0, escale = 0.0;
   auto& model = st.model();
   if (opt.energy) {
-    p_in = model.input_power(st.u(), st.v(), st.time());
+    p_in = model.input_power(st.u(), st.v(), st.time(), +1);
     p_diss = model.dissipated_power(st.v());
     const double ek = model.kinetic(st.v()), ep = model.potential(st.u(), st.time());
     e0 = ek + ep;
@@ -367,10 +367,11 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
       }
       if (opt.energy) {
-        const double q_in = model.input_power(st.u(), st.v(), st.time()), q_diss = model.dissipated_power(st.v());
+        // the input power as this step ends and as the next starts: they differ where a signal's rate jumps
+        const double q_in = model.input_power(st.u(), st.v(), st.time(), -1), q_diss = model.dissipated_power(st.v());
         work += 0.5 * h * (p_in + q_in);
         diss += 0.5 * h * (p_diss + q_diss);
-        p_in = q_in;
+        p_in = model.input_power(st.u(), st.v(), st.time(), +1);
         p_diss = q_diss;
         // From the 10th step: a run forced from rest starts with a tiny energy of which
         // the start-up balance error is a large fraction (about 1/n^2: 0.9 at step 1,

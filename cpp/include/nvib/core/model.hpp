@@ -97,6 +97,13 @@ struct has_energy<F, std::void_t<decltype(std::declval<const F&>().potential(std
                                                                                std::declval<const CVecRef&>(), 0.0)),
                                  decltype(std::declval<const F&>().dissipated_power(std::declval<const CVecRef&>()))>>
     : std::true_type {};
+// input_power(u, v, t, side): the power with the limit of a kinked signal chosen (the effects).
+template <class F, class = void>
+struct has_sided_power : std::false_type {};
+template <class F>
+struct has_sided_power<F, std::void_t<decltype(std::declval<const F&>().input_power(
+                              std::declval<const CVecRef&>(), std::declval<const CVecRef&>(), 0.0, 0))>>
+    : std::true_type {};
 // magnitude(u, v, t, out): out_i = the sum of |contributions| to the force on DOF i.
 template <class F, class = void>
 struct has_magnitude : std::false_type {};
@@ -205,8 +212,11 @@ class Model {
     if constexpr (traits::has_energy<Force>::value) e += f_.potential(u, t);
     return e;
   }
-  double input_power(const CVecRef& u, const CVecRef& v, double t) {
+  // side: -1 the power as a step ends, +1 as the next one starts (they differ where a signal's rate jumps).
+  double input_power(const CVecRef& u, const CVecRef& v, double t, int side = 0) {
+    if constexpr (traits::has_sided_power<Force>::value) return f_.input_power(u, v, t, side);
     if constexpr (traits::has_energy<Force>::value) return f_.input_power(u, v, t);
+    (void)side;
     return 0.0;
   }
   double dissipated_power(const CVecRef& v) {

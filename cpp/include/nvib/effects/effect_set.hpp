@@ -133,13 +133,13 @@ class EffectSet {
       return decltype(L)::potential(p, d, t);
     });
   }
-  double input_power(const CVecRef& u, const CVecRef& v, double t) const {
+  double input_power(const CVecRef& u, const CVecRef& v, double t, int side = 0) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
     const double w = sum_terms(-a.f_const.dot(v), [&](auto L, compiled::Storage s, const compiled::Term& c) {
-      return effects::input_power<decltype(L)>(c.p, a.measure(s, c, u), a.measure(s, c, v), t);
+      return effects::input_power<decltype(L)>(c.p, a.measure(s, c, u), a.measure(s, c, v), t, side);
     });
     return sum_arrays(w, u.data(), v.data(), [&](auto L, const LawParams& p, double d, double dd) {
-      return effects::input_power<decltype(L)>(p, d, dd, t);
+      return effects::input_power<decltype(L)>(p, d, dd, t, side);
     });
   }
   double dissipated_power(const CVecRef& v) const {

@@ -236,11 +236,13 @@ constexpr bool is_dissipative() {
 }
 // Power put in from outside: loads (P . v) and a moving rail (the contact
 // potential V(d - r(t)) changes at the rate -f r'(t)).
+// side: which limit of the signal's rate at a kink (Signal::derivative).
 template <class L>
-double input_power(const LawParams& p, double d, double dd, double t) {
+double input_power(const LawParams& p, double d, double dd, double t, int side = 0) {
   if constexpr (L::is_load) return -L::value(p, d, dd, t) * dd;
-  if constexpr (L::id == Law::hertz_contact) return p.signal ? -L::value(p, d, dd, t) * p.signal->derivative(t) : 0.0;
-  (void)p, (void)d, (void)dd, (void)t;
+  if constexpr (L::id == Law::hertz_contact)
+    return p.signal ? -L::value(p, d, dd, t) * p.signal->derivative(t, side) : 0.0;
+  (void)p, (void)d, (void)dd, (void)t, (void)side;
   return 0.0;
 }
 template <class L>

@@ -57,23 +57,26 @@ struct Signal {
     }
     return 0.0;
   }
-  double derivative(double time) const {
+  // The rate of the signal at `time`. A table's slope jumps at its knots; there (to round-off: a step's
+  // time n h may miss a knot by an ulp) `side` chooses the limit: -1 from the left (the end of the step
+  // before), +1 from the right (the start of the step after), 0 their mean (the first knot: the slope
+  // inside). The energy accounting integrates the power by the trapezoidal rule, step by step: the end of
+  // a step takes the left limit and the start of the next the right one, so a kink on a step point costs
+  // O(h^2) like any other point, where one value for both would leave an O(h) error (once in the sum with
+  // a one-sided value, or at that instant with the mean).
+  double derivative(double time, int side = 0) const {
     switch (kind) {
       case Kind::none: return 0.0;
       case Kind::sine: return amplitude * omega * std::cos(omega * time + phase);
       case Kind::table: {
-        // At a knot the slope jumps; there (to round-off: a step's time n h may miss it by an ulp) the
-        // derivative is the mean of the two one-sided slopes, 0 outside the table. The energy accounting
-        // integrates the power by the trapezoidal rule, which weighs the value at a step point by h, half
-        // for each neighbouring step: with the mean a kink on a step point costs O(h^2) like any other,
-        // where either one-sided slope would cost O(h) there once, making the balance first order.
         const double tol = 64.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(time));
         if (time < t.front() || time > t.back() + tol) return 0.0;
         const size_t i = segment(time);
         const size_t k = time - t[i] <= t[i + 1] - time ? i : i + 1;  // the nearest knot
-        // The first knot keeps the slope inside: a run usually starts there, where the trapezoidal rule
-        // weighs only the step after it.
-        if (k > 0 && std::abs(time - t[k]) <= tol) return 0.5 * (slope_of(k) + slope_of(k - 1));
+        if (k > 0 && std::abs(time - t[k]) <= tol) {
+          const double left = slope_of(k - 1), right = slope_of(k);
+          return side < 0 ? left : side > 0 ? right : 0.5 * (left + right);
+        }
         if (time > t.back()) return 0.0;
         return slope_of(i);
       }
