@@ -273,6 +273,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   // Energy: powers at the last state, integrals so far, initial total.
   double p_in = 0.0, p_diss = 0.0, work = 0.0, diss = 0.0, e0 = 0.0, escale = 0.0;
   auto& model = st.model();
+  const bool sided = opt.energy && model.power_jumps();  // else one input power serves both sides of a step point
   if (opt.energy) {
     p_in = model.input_power(st.u(), st.v(), st.time(), +1);
     p_diss = model.dissipated_power(st.v());
@@ -371,7 +372,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         const double q_in = model.input_power(st.u(), st.v(), st.time(), -1), q_diss = model.dissipated_power(st.v());
         work += 0.5 * h * (p_in + q_in);
         diss += 0.5 * h * (p_diss + q_diss);
-        p_in = model.input_power(st.u(), st.v(), st.time(), +1);
+        p_in = sided ? model.input_power(st.u(), st.v(), st.time(), +1) : q_in;
         p_diss = q_diss;
         // From the 10th step: a run forced from rest starts with a tiny energy of which
         // the start-up balance error is a large fraction (about 1/n^2: 0.9 at step 1,

@@ -97,7 +97,7 @@ struct has_energy<F, std::void_t<decltype(std::declval<const F&>().potential(std
                                                                                std::declval<const CVecRef&>(), 0.0)),
                                  decltype(std::declval<const F&>().dissipated_power(std::declval<const CVecRef&>()))>>
     : std::true_type {};
-// input_power(u, v, t, side): the power with the limit of a kinked signal chosen (the effects).
+// input_power(u, v, t, side) and power_jumps(): the power with the limit of a kinked signal chosen (the effects).
 template <class F, class = void>
 struct has_sided_power : std::false_type {};
 template <class F>
@@ -211,6 +211,11 @@ class Model {
     }
     if constexpr (traits::has_energy<Force>::value) e += f_.potential(u, t);
     return e;
+  }
+  // Whether input_power() can differ between the two sides of a step point (see below).
+  bool power_jumps() const {
+    if constexpr (traits::has_sided_power<Force>::value) return f_.power_jumps();
+    return false;
   }
   // side: -1 the power as a step ends, +1 as the next one starts (they differ where a signal's rate jumps).
   double input_power(const CVecRef& u, const CVecRef& v, double t, int side = 0) {

@@ -82,6 +82,7 @@ class EffectsPlus {
     if constexpr (traits::has_energy<Extra>::value) e += extra_.potential(u, t);
     return e;
   }
+  bool power_jumps() const { return effects_.power_jumps(); }
   double input_power(const CVecRef& u, const CVecRef& v, double t, int side = 0) const {
     double p = effects_.input_power(u, v, t, side);
     if constexpr (traits::has_energy<Extra>::value) p += extra_.input_power(u, v, t);

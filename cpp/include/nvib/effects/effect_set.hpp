@@ -133,6 +133,15 @@ class EffectSet {
       return decltype(L)::potential(p, d, t);
     });
   }
+  // Whether the input power can jump in time (a signal whose rate jumps): only then does it matter which
+  // side of a step point input_power() takes.
+  bool power_jumps() const {
+    for (const Effect& e : effects())
+      if (e.signal.rate_jumps()) return true;
+    for (const EffectArray& a : arrays())
+      if (a.signal.rate_jumps()) return true;
+    return false;
+  }
   double input_power(const CVecRef& u, const CVecRef& v, double t, int side = 0) const {
     const compiled::Arrays& a = c_->arrays_of_terms();
     const double w = sum_terms(-a.f_const.dot(v), [&](auto L, compiled::Storage s, const compiled::Term& c) {

@@ -43,6 +43,8 @@ struct Signal {
   }
 
   bool present() const { return kind != Kind::none; }
+  // Whether its rate jumps (at a table's knots): then derivative() depends on the side.
+  bool rate_jumps() const { return kind == Kind::table; }
 
   double value(double time) const {
     switch (kind) {
