@@ -105,6 +105,16 @@ def _units(where: str, units, n: int):
     return units[0] if len(set(units)) == 1 else units
 
 
+def unit_list(units, n: int) -> list[str]:
+    """The unit of each of n DOFs from what ``_units`` keeps: one string for all, or a list."""
+    return [units] * n if isinstance(units, str) else list(units)
+
+
+def rate_unit(unit: str, power: int) -> str:
+    """The unit of the displacement (power 0), velocity (1) or acceleration (2) of a DOF in ``unit``."""
+    return unit if power == 0 else f"{unit}/s" if power == 1 else f"{unit}/s^2"
+
+
 def _rebuild_model(init, state) -> "Model":
     mass, kwargs = init
     model = Model(mass, **kwargs)
@@ -407,7 +417,7 @@ class Model:
     @property
     def units(self) -> list[str]:
         """The unit of each DOF's displacement (velocities in units/s, accelerations in units/s^2)."""
-        return [self._units] * self.n if isinstance(self._units, str) else list(self._units)
+        return unit_list(self._units, self.n)
 
     def unit(self, dof) -> str:
         """The unit of one DOF (a name or an index)."""

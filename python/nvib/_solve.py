@@ -12,7 +12,7 @@ import numpy as np
 from . import _checks, _core
 from ._core import Energy, Failure, Result, Stats, Status
 from ._errors import error_for
-from ._model import Model
+from ._model import Model, unit_list
 from ._records import GroundMotion
 
 __all__ = ["ENERGY_WARNING", "Energy", "Failure", "Result", "Stats", "Status", "Stepper", "default_max_displacement",
@@ -76,17 +76,13 @@ def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
     return res
 
 
-def _unit_list(units, n: int) -> list[str]:
-    return [units] * n if isinstance(units, str) else list(units)
-
-
 Result._ground = property(lambda self: _extras(self).get("ground"))
 Result.relative_to_ground = property(
     lambda self: bool(_extras(self).get("relative_to_ground", False)),
     doc="True when the model moves on a shaking ground: u, v and a are then relative to the ground "
         "(``absolute_a`` adds the ground's acceleration back)")
 Result.units = property(
-    lambda self: _unit_list(_extras(self).get("units", "m"), len(self.dofs)),
+    lambda self: unit_list(_extras(self).get("units", "m"), len(self.dofs)),
     doc="the unit of each saved DOF's displacement (the model's ``units``; time is in s)")
 Result.warnings = property(
     lambda self: list(_extras(self).get("warnings", ())),

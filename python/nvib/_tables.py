@@ -12,6 +12,7 @@ import numpy as np
 from . import _checks
 from ._core import Failure, Result, Stats, Status
 from ._io import save_result
+from ._model import rate_unit
 
 __all__ = ["load_result"]
 
@@ -52,14 +53,9 @@ def to_pandas(self):
             cols[f"energy:{k}"] = np.asarray(v)
     df = pd.DataFrame(cols, index=pd.Index(np.asarray(self.t), name="t"))
     df.attrs.update(_attrs(self))
-    df.attrs["units"] = {"t": "s", **{f"{q}:{d}": _rate_unit(u, p) for q, p in (("u", 0), ("v", 1), ("a", 2))
+    df.attrs["units"] = {"t": "s", **{f"{q}:{d}": rate_unit(u, p) for q, p in (("u", 0), ("v", 1), ("a", 2))
                                       for d, u in zip(self.dofs, self.units)}}
     return df
-
-
-def _rate_unit(unit: str, power: int) -> str:
-    """The unit of a displacement, velocity or acceleration of a DOF in ``unit``."""
-    return unit if power == 0 else f"{unit}/s" if power == 1 else f"{unit}/s^2"
 
 
 def to_xarray(self):
@@ -73,7 +69,7 @@ def to_xarray(self):
                                   "unit": ("dof", [str(u) for u in self.units])})
     ds["time"].attrs["units"] = "s"
     for q, p in (("u", 0), ("v", 1), ("a", 2)):  # per DOF in the unit coordinate; here the rate
-        ds[q].attrs["units"] = _rate_unit("unit", p)
+        ds[q].attrs["units"] = rate_unit("unit", p)
     ds.attrs.update(_attrs(self))
     return ds
 

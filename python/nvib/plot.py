@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _checks
+from ._model import rate_unit
 
 MAX_POINTS = 50_000  # per curve; longer histories are thinned evenly (always keeping the last point)
 MAX_OTHER_DOFS = 4   # beside the highlighted DOF when a model has more than MAX_ALL_DOFS
@@ -249,7 +250,7 @@ def run_figure(result, model, dof, title: str | None = None, *, measure: str | N
         _log_if_blown_up(ax, [y], axis="x")
         _log_if_blown_up(ax, [yd], axis="y")
     ax.set_xlabel(f"{short} [{unit}]")
-    ax.set_ylabel(f"d{short}/dt [{unit}/s]")
+    ax.set_ylabel(f"d{short}/dt [{rate_unit(unit, 1)}]")
     ax.set_title(f"Phase locus of {short}{rel_y}", fontsize=10)
     ax.grid(True, alpha=0.3)
 

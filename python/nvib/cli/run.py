@@ -91,7 +91,6 @@ def load_model(args):
 
 def run(args) -> int:
     from .. import _core, solve
-    from .._io import FORMATS
     from .._progress import ProgressBar
 
     if args.out is not None:
@@ -223,6 +222,8 @@ def failure_line(result, scheme, dt: float) -> str:
 
 
 def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args) -> None:
+    from .._model import rate_unit
+
     s = model.scene
     stats = res.stats.as_dict()
     title = f"{s['name']}: {s['title']}" if s.get("title") else s["name"]
@@ -246,10 +247,9 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
         j = res.dofs.index(dof)
         u, v, a = (float(x[-1, j]) + 0.0 for x in (res.u, res.v, res.a))  # + 0.0: no "-0"
         unit = res.units[j]
-        lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g} {unit}, v = {v:.9g} {unit}/s, "
-                                      f"a = {a:.9g} {unit}/s^2"))
-        if res.relative_to_ground:
-            lines[-1] = (lines[-1][0], lines[-1][1] + " (relative to the ground)")
+        lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g} {unit}, v = {v:.9g} {rate_unit(unit, 1)}, "
+                                      f"a = {a:.9g} {rate_unit(unit, 2)}"
+                                      + (" (relative to the ground)" if res.relative_to_ground else "")))
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
         lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D - W - E0| / max energy)"
