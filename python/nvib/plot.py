@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _checks
+from ._labels import status_text
 from ._model import rate_unit
 
 MAX_POINTS = 50_000  # per curve; longer histories are thinned evenly (always keeping the last point)
@@ -100,8 +101,7 @@ def default_title(result, model) -> str:
 def _status_note(result) -> str | None:
     if result.success:
         return None
-    what = {"diverged": "diverged", "newton_failed": "Newton failed",
-            "singular_matrix": "singular iteration matrix", "interrupted": "interrupted"}.get(result.status.name, result.status.name)
+    what = status_text(result.status)
     f = result.failure
     where = f" at t = {f.t:g} s (step {f.step})" if f is not None else ""
     return f"{what}{where}: partial history"

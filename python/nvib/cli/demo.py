@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 
+from .._labels import status_text
 from .._model import Model
 from .._schemes import scheme_classes
 from .._solve import solve
@@ -52,9 +53,7 @@ def blowup(res, e: np.ndarray, e0: float) -> str | None:
     or None when it ran to t_end with its energy e within BLOWUP x e0. Energy lost is numerical damping,
     not a blow-up."""
     if res.failure is not None:
-        what = {"diverged": "diverged", "newton_failed": "Newton failed",
-                "singular_matrix": "singular matrix"}.get(res.status.name, res.status.name)
-        return f"{what} at t = {res.failure.t:g} (step {res.failure.step})"
+        return f"{status_text(res.status)} at t = {res.failure.t:g} (step {res.failure.step})"
     with np.errstate(all="ignore"):
         bad = ~(e <= BLOWUP * e0)  # NaN counts
     if np.any(bad):
