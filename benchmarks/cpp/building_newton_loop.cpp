@@ -8,7 +8,7 @@
 //       M x'' + G(x, t) = 0,  G = F_s(x) + M r a_g(t),   x(0) = x'(0) = 0.
 //
 // Each step solves the equation of the step for u_{n+1} by Newton's method,
-// as nvib's Newton component does (core/newton.hpp) and with its convergence
+// as nvib's Newton component does (newton/newton.hpp) and with its convergence
 // test, so that both make the same iterations:
 //   predictor u_{n+1} = u_n; Newmark relations for a_{n+1}, v_{n+1};
 //   residual    r = (1-am) M a_{n+1} + am M a_n + G(u_a, t_a),

@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "../core/types.hpp"
+#include "../base/types.hpp"
 #include "laws.hpp"
 
 namespace nvib {

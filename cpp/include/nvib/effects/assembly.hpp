@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "../core/model.hpp"
+#include "../model/model.hpp"
 #include "effect_set.hpp"
 
 namespace nvib {

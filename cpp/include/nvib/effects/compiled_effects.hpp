@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "../core/interrupt.hpp"
-#include "../core/mass.hpp"
+#include "../base/interrupt.hpp"
+#include "../model/mass.hpp"
 #include "array_kernels.hpp"
 #include "compiled_terms.hpp"
 #include "effect.hpp"

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "../core/types.hpp"
+#include "../base/types.hpp"
 #include "laws.hpp"
 
 namespace nvib {

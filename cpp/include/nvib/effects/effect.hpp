@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "../core/types.hpp"
+#include "../base/types.hpp"
 #include "laws.hpp"
 
 namespace nvib {

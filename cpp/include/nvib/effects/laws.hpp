@@ -11,7 +11,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "../core/format.hpp"
+#include "../base/errors.hpp"
 #include "signal.hpp"
 
 namespace nvib {

@@ -6,7 +6,7 @@
 #include <limits>
 #include <vector>
 
-#include "../core/format.hpp"
+#include "../base/errors.hpp"
 
 namespace nvib {
 namespace effects {

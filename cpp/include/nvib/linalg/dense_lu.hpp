@@ -14,7 +14,7 @@
 
 #include <Eigen/LU>
 
-#include "../core/types.hpp"
+#include "../base/types.hpp"
 
 namespace nvib {
 

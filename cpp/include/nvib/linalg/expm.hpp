@@ -7,8 +7,8 @@
 // log10(2^N) significant digits to round-off.
 #pragma once
 
-#include "../core/interrupt.hpp"
-#include "../core/types.hpp"
+#include "../base/interrupt.hpp"
+#include "../base/types.hpp"
 
 namespace nvib {
 

@@ -15,7 +15,7 @@
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 
-#include "../core/types.hpp"
+#include "../base/types.hpp"
 
 namespace nvib {
 

@@ -3,12 +3,12 @@
 // one header, its name in this list and one test file.
 #pragma once
 
-#include "../core/scheme.hpp"
 #include "cemdts.hpp"
 #include "central_difference.hpp"
 #include "generalized_alpha.hpp"
 #include "newmark.hpp"
 #include "precise_integration.hpp"
+#include "scheme.hpp"
 #include "zhai.hpp"
 
 namespace nvib {

@@ -13,8 +13,8 @@
 
 #include <string>
 
-#include "../core/scheme.hpp"
-#include "../core/stepper.hpp"
+#include "scheme.hpp"
+#include "stepper.hpp"
 
 namespace nvib {
 

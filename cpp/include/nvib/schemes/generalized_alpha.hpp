@@ -28,9 +28,9 @@
 #include <limits>
 #include <string>
 
-#include "../core/newton.hpp"
-#include "../core/scheme.hpp"
-#include "../core/stepper.hpp"
+#include "../newton/newton.hpp"
+#include "scheme.hpp"
+#include "stepper.hpp"
 
 namespace nvib {
 
@@ -125,7 +125,7 @@ template <class ModelT>
 class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   using Base = StepperBase<ModelT>;
   NVIB_STEPPER_STATE(Base);
-  using Solver = NewtonSolver<AutoLinearSolver>;
+  using Solver = NewtonSolver<IterationSystem>;
   friend Solver;
 
  public:

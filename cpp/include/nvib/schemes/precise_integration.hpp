@@ -25,9 +25,9 @@
 #include <algorithm>
 #include <string>
 
-#include "../core/scheme.hpp"
-#include "../core/stepper.hpp"
 #include "../linalg/expm.hpp"
+#include "scheme.hpp"
+#include "stepper.hpp"
 
 namespace nvib {
 

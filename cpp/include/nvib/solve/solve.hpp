@@ -11,9 +11,9 @@
 #include <type_traits>
 #include <utility>
 
-#include "core/interrupt.hpp"
-#include "core/memory.hpp"
-#include "core/stepper.hpp"
+#include "../base/interrupt.hpp"
+#include "../base/memory.hpp"
+#include "../schemes/stepper.hpp"
 
 namespace nvib {
 

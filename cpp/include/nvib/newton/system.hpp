@@ -1,56 +1,69 @@
-// Linear solvers of the Newton component. A policy owns the iteration matrix
-// S = cM M + cC C_t + cK K_t and its factorisation:
-//   bool factorize(model, IterationMatrix, Stats&, bool finite_difference)   false if S is singular
-//   void solve_in_place(Vector& x)          x <- S^{-1} x
-//   void multiply_C(const Vector& x, Vector& out) const   out = C_t x (the last tangent)
+// The linear system of the Newton component: the iteration matrix assembled
+// from the model (iteration_matrix.hpp) and factorised (linalg/), dense or
+// sparse, chosen once per stepper by size and density (or forced) and named in
+// Stats::linear_solver. The Newton component asks it for
+//   bool factorize(model, IterationMatrix, Stats&, bool finite_difference, choice)   false if S is singular
+//   void solve_in_place(Vector& x)                      x <- S^{-1} x
+//   void multiply_C(const Vector& x, Vector& out) const out = C_t x (the last tangent)
 //   Vector tangent_diagonal()                           the diagonal of the last K_t
-//   Index first_nonfinite_tangent_row() const             -1 if the last tangent is finite
-// DenseLinearSolver (dense_solver.hpp), SparseLinearSolver (sparse_solver.hpp),
-// and AutoLinearSolver, which chooses between them by size and density and
-// says which in Stats::linear_solver.
+//   Index first_nonfinite_tangent_row() const           -1 if the last tangent is finite
 #pragma once
 
 #include <string>
 
-#include "../core/mass.hpp"
-#include "../core/types.hpp"
-#include "dense_solver.hpp"
+#include "../base/types.hpp"
+#include "../linalg/dense_lu.hpp"
+#include "../linalg/sparse_factorization.hpp"
+#include "../model/mass.hpp"
 #include "iteration_matrix.hpp"
-#include "sparse_solver.hpp"
+#include "options.hpp"
 
 namespace nvib {
 
-class AutoLinearSolver {
+class IterationSystem {
  public:
   // Up to this size the dense LU is used whatever the pattern (it is faster there);
   // up to kDenseFullMax also when S is more than a quarter full.
   static constexpr Index kDenseBelow = 64, kDenseFullMax = 500;
+  static constexpr const char* kDenseName = "dense LU";
 
   void resize(Index) { chosen_ = false; }
-  const char* name() const { return !chosen_ ? "" : dense_ ? DenseLinearSolver::name : sparse_.name(); }
+  const char* name() const { return !chosen_ ? "" : dense_ ? kDenseName : sparse_lu_.name(); }
   bool is_dense() const { return dense_; }
 
   template <class ModelT>
   bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference,
                  LinearSolverChoice choice = LinearSolverChoice::automatic) {
     if (!chosen_) choose(model, finite_difference, choice);
-    return dense_ ? dense_solver_.factorize(model, im, st, finite_difference) : sparse_.factorize(model, im, st);
+    if (dense_) {
+      if (dense_S_.size() != model.size()) {
+        dense_S_.resize(model.size());
+        lu_.resize(model.size());
+      }
+      st.linear_solver = kDenseName;
+      dense_S_.assemble(model, im, st, finite_difference, lu_.assembly());
+      return lu_.factorize_assembled();
+    }
+    if (!sparse_S_.assemble(model, im, st)) return false;
+    const bool ok = sparse_lu_.factorize(sparse_S_.matrix());
+    st.linear_solver = sparse_lu_.name();
+    return ok;
   }
   void solve_in_place(Vector& x) const {
     if (dense_)
-      dense_solver_.solve_in_place(x);
+      lu_.solve_in_place(x);
     else
-      sparse_.solve_in_place(x);
+      sparse_lu_.solve_in_place(x);
   }
   void multiply_C(const Vector& x, Vector& out) const {
     if (dense_)
-      dense_solver_.multiply_C(x, out);
+      dense_S_.multiply_C(x, out);
     else
-      sparse_.multiply_C(x, out);
+      sparse_S_.multiply_C(x, out);
   }
-  Vector tangent_diagonal() { return dense_ ? dense_solver_.tangent_diagonal() : sparse_.tangent_diagonal(); }
+  Vector tangent_diagonal() { return dense_ ? dense_S_.tangent_diagonal() : sparse_S_.tangent_diagonal(); }
   Index first_nonfinite_tangent_row() const {
-    return dense_ ? dense_solver_.first_nonfinite_tangent_row() : sparse_.first_nonfinite_tangent_row();
+    return dense_ ? dense_S_.first_nonfinite_tangent_row() : sparse_S_.first_nonfinite_tangent_row();
   }
 
  private:
@@ -76,21 +89,31 @@ class AutoLinearSolver {
                            " DOFs declare its forces as effects (their tangent is sparse), or use an explicit scheme");
       dense_ = true;
     } else if (choice == LinearSolverChoice::sparse) {
-      sparse_.setup(model);
+      setup_sparse(model);
       dense_ = false;
     } else if (n <= kDenseBelow) {
       dense_ = true;
     } else {
-      sparse_.setup(model);
-      const double fill = static_cast<double>(sparse_.nonzeros()) / (static_cast<double>(n) * static_cast<double>(n));
+      setup_sparse(model);
+      const double fill = static_cast<double>(sparse_S_.nonzeros()) / (static_cast<double>(n) * static_cast<double>(n));
       dense_ = n <= kDenseFullMax && fill > 0.25;
     }
-    if (dense_) dense_solver_.resize(n);
+    if (dense_) {
+      dense_S_.resize(n);
+      lu_.resize(n);
+    }
+  }
+  template <class ModelT>
+  void setup_sparse(const ModelT& model) {
+    sparse_S_.setup(model);
+    sparse_lu_.analyze(sparse_S_.matrix(), sparse_S_.symmetric());
   }
 
   bool chosen_ = false, dense_ = true;
-  DenseLinearSolver dense_solver_;
-  SparseLinearSolver sparse_;
+  DenseIterationMatrix dense_S_;
+  DenseLU lu_;
+  SparseIterationMatrix sparse_S_;
+  SparseFactorization sparse_lu_;
 };
 
 }  // namespace nvib

@@ -11,7 +11,7 @@
 
 #include "../linalg/sparse_cholesky.hpp"
 
-#include "types.hpp"
+#include "../base/types.hpp"
 
 namespace nvib {
 

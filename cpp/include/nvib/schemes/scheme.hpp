@@ -22,8 +22,8 @@
 #include <type_traits>
 #include <utility>
 
-#include "newton.hpp"
-#include "parameters.hpp"
+#include "../base/parameters.hpp"
+#include "../newton/options.hpp"
 
 namespace nvib {
 

@@ -16,8 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "../base/types.hpp"
 #include "mass.hpp"
-#include "types.hpp"
 
 namespace nvib {
 

@@ -4,8 +4,8 @@
 
 #include <utility>
 
-#include "model.hpp"
-#include "types.hpp"
+#include "../base/types.hpp"
+#include "../model/model.hpp"
 
 namespace nvib {
 

@@ -1,41 +1,79 @@
-// The sparse linear solver of the Newton component, for models whose force
-// gives its tangent entry by entry (effects, laws on measures).
-//
-// Set-up, once per stepper: the pattern of S = cM M + cC C_t + cK K_t is the
-// union of the mass, the linear K and C and the entries of the nonlinear
-// tangent; each contribution gets its position in S's values, so that every
-// factorisation only adds numbers into place (no search, no allocation).
-// The symbolic analysis (with a fill-reducing ordering: AMD for LDL^T, COLAMD
-// for LU) is done there too. Then:
-//   symmetric S (symmetric K and C: every effect's g g^T is): sparse LDL^T,
-//     falling back to sparse LU for a matrix LDL^T without pivoting cannot take;
-//   otherwise sparse LU.
-// The factorisation is reused as long as the Newton component keeps S (modified
-// Newton, a linear model). LDL^T refactorises and solves without allocating (see
-// sparse_cholesky.hpp; only its scratch vectors beyond 128 kB go to the heap, Eigen's
-// limit for the stack); sparse LU allocates in every factorisation and solve.
+// The iteration matrix of an implicit step, S = cM M + cC C_t + cK K_t with the
+// tangents at (u, v, t), assembled from the model: dense (K_t and C_t as n x n
+// matrices, for small models and forces whose tangent is only known as a whole
+// matrix) or sparse (the force gives its tangent entry by entry). The linear
+// algebra that factorises S is in linalg/.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <vector>
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseLU>
-
-#include "../core/interrupt.hpp"
-#include "../core/types.hpp"
-#include "iteration_matrix.hpp"
-#include "sparse_cholesky.hpp"
+#include "../base/interrupt.hpp"
+#include "../base/types.hpp"
 
 namespace nvib {
 
-class SparseLinearSolver {
+// S = cM M + cC C_t + cK K_t with the tangents taken at (u, v, t).
+struct IterationMatrix {
+  double cM = 0.0, cC = 0.0, cK = 1.0;
+  const Vector* u = nullptr;
+  const Vector* v = nullptr;
+  double t = 0.0;
+};
+
+// Dense: K_t and C_t from the model's tangent, S assembled into storage the caller gives (the LU's).
+class DenseIterationMatrix {
  public:
-  const char* name() const { return lu_now_ ? "sparse LU" : "sparse LDLT"; }
-  Index nonzeros() const { return static_cast<Index>(S_.nonZeros()); }
+  void resize(Index n) {
+    Kt_.setZero(n, n);
+    Ct_.setZero(n, n);
+  }
+  Index size() const { return Kt_.rows(); }
+
+  template <class ModelT>
+  void assemble(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference, Matrix& S) {
+    if (Kt_.rows() != model.size()) resize(model.size());
+    model.tangent(*im.u, *im.v, im.t, Kt_, Ct_, st, finite_difference);
+    const Index n = S.rows();
+    const double *K = Kt_.data(), *C = Ct_.data();
+    double* out = S.data();
+    for (Index ij = 0; ij < n * n; ++ij) out[ij] = im.cK * K[ij];
+    const auto& mass = model.mass();
+    if (mass.is_diagonal()) {
+      const double* m = mass.diagonal_entries().data();
+      for (Index i = 0; i < n; ++i) out[i + i * n] += im.cM * m[i];
+    } else {
+      mass.for_each_entry([&](Index i, Index j, double m) { out[i + j * n] += im.cM * m; });
+    }
+    if (model.uses_velocity())
+      for (Index ij = 0; ij < n * n; ++ij) out[ij] += im.cC * C[ij];
+  }
+
+  // out = C_t x (the last tangent)
+  void multiply_C(const Vector& x, Vector& out) const { out.noalias() = Ct_ * x; }
+  Vector tangent_diagonal() const { return Kt_.diagonal(); }
+  Index first_nonfinite_tangent_row() const {
+    if (Kt_.allFinite() && Ct_.allFinite()) return -1;
+    Index dof = 0;
+    while (dof + 1 < Kt_.rows() && Kt_.row(dof).allFinite() && Ct_.row(dof).allFinite()) ++dof;
+    return dof;
+  }
+
+ private:
+  Matrix Kt_, Ct_;
+};
+
+// Sparse: set up once per stepper, the pattern of S is the union of the mass, the linear K and C
+// and the entries of the nonlinear tangent; each contribution gets its position in S's values, so
+// that every assembly only adds numbers into place (no search, no allocation).
+class SparseIterationMatrix {
+ public:
   bool ready() const { return ready_; }
+  const SparseMatrix& matrix() const { return S_; }
+  Index nonzeros() const { return static_cast<Index>(S_.nonZeros()); }
+  // Symmetric S: symmetric K and C (every effect's g g^T is).
+  bool symmetric() const { return symmetric_; }
 
   template <class ModelT>
   void setup(const ModelT& model) {
@@ -82,19 +120,13 @@ class SparseLinearSolver {
     }
     poll_interrupt();
     symmetric_ = is_symmetric(model.K()) && (!velocity_ || is_symmetric(model.C()));
-    lu_now_ = !symmetric_;
-    if (symmetric_)
-      ldlt_.analyze(S_);
-    else
-      lu_.analyzePattern(S_);
-    lu_analyzed_ = !symmetric_;
-    work_.setZero(n);
     kdiag_.setZero(n);
     ready_ = true;
   }
 
+  // S at the tangent of (u, v, t); false if the tangent is not finite.
   template <class ModelT>
-  bool factorize(ModelT& model, const IterationMatrix& im, Stats& st) {
+  bool assemble(ModelT& model, const IterationMatrix& im, Stats& st) {
     if (!ready_) setup(model);
     model.tangent_values(*im.u, *im.v, im.t, kvals_.data(), cvals_.data(), st);
     for (double x : kvals_)
@@ -115,39 +147,16 @@ class SparseLinearSolver {
       for (size_t k = 0; k < posCtN_.size(); ++k) c[posCtN_[k]] += cvals_[k];
     }
     K_ = &model.K();
-    lu_now_ = !symmetric_;
-    if (symmetric_) {
-      ldlt_.factorize_values(S_);
-      if (ldlt_.info() == Eigen::Success && regular(ldlt_.pivots())) {
-        st.linear_solver = name();
-        return true;
-      }
-      lu_now_ = true;  // a zero or tiny pivot without pivoting: LU with pivoting may still do
-    }
-    if (!lu_analyzed_) {
-      lu_.analyzePattern(S_);
-      lu_analyzed_ = true;
-    }
-    lu_.factorize(S_);
-    st.linear_solver = name();
-    return lu_.info() == Eigen::Success;
+    return true;
   }
 
-  void solve_in_place(Vector& x) const {
-    if (lu_now_) {
-      work_ = x;
-      x = lu_.solve(work_);
-    } else {
-      ldlt_.solve_in_place(x.data(), work_);
-    }
-  }
   void multiply_C(const Vector& x, Vector& out) const {
     if (velocity_)
       out.noalias() = Ct_ * x;
     else
       out.setZero();
   }
-  // The diagonal of K_t at the last factorisation.
+  // The diagonal of K_t at the last assembly.
   const Vector& tangent_diagonal() {
     kdiag_.setZero();
     if (K_ != nullptr)
@@ -200,27 +209,13 @@ class SparseLinearSolver {
     for (Index k = 0; k < A.nonZeros(); ++k) amax = std::max(amax, std::abs(A.valuePtr()[k]));
     return dmax <= 1e-14 * amax;
   }
-  // The pivots of LDL^T: finite and none below 1e-14 of the largest (as the dense LU's test).
-  static bool regular(const Vector& d) {
-    double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
-    for (Index i = 0; i < d.size(); ++i) {
-      const double a = std::abs(d[i]);
-      if (!std::isfinite(a)) return false;
-      lo = std::min(lo, a);
-      hi = std::max(hi, a);
-    }
-    return d.size() > 0 && lo > 1e-14 * hi;
-  }
 
-  bool ready_ = false, velocity_ = false, symmetric_ = true, lu_now_ = false, lu_analyzed_ = false;
+  bool ready_ = false, velocity_ = false, symmetric_ = true;
   SparseMatrix S_, Ct_;
   const SparseMatrix* K_ = nullptr;
   std::vector<Entry> kent_, cent_;
   std::vector<double> kvals_, cvals_, mvals_;
   std::vector<int> posM_, posK_, posC_, posNK_, posNC_, posCtC_, posCtN_;
-  OrderedCholesky<true> ldlt_;
-  Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>> lu_;
-  mutable Vector work_;
   Vector kdiag_;
 };
 

@@ -13,7 +13,8 @@
 //   bool linear()                        the model is linear: one factorisation per run, one solve per step
 //   double residual_roundoff()           optional: the round-off in r at the current iterate
 // The component owns the iteration: modes, convergence test, iteration limit,
-// counters and failure reports. The linear solver is a policy (dense LU here).
+// counters and failure reports. The linear system (the iteration matrix assembled
+// from the model and factorised, system.hpp) is a policy.
 #pragma once
 
 #include <cmath>
@@ -21,83 +22,19 @@
 #include <string>
 #include <vector>
 
-#include "../linalg/linear_solvers.hpp"
-#include "interrupt.hpp"
-#include "parameters.hpp"
-#include "types.hpp"
+#include "../base/interrupt.hpp"
+#include "../base/types.hpp"
+#include "options.hpp"
+#include "system.hpp"
 
 namespace nvib {
-
-// newton:        tangent and factorisation every iteration;
-// modified:      tangent once per step, at the predictor;
-// initial:       tangent once per run, at the initial state (OpenSees' ModifiedNewton -initial);
-// incremental:   the textbook incremental format (Chopra, Dynamics of Structures,
-//                section 5.7): tangent at the start of the step, the step's force
-//                increment linearised with it, no equilibrium iteration; the
-//                equilibrium error of earlier steps is carried, never corrected,
-//                so it is first order on nonlinear models;
-// one_iteration: one Newton iteration on the full residual from the predictor,
-//                then accept. Unlike the incremental format it starts from the
-//                full residual, so earlier equilibrium errors are corrected.
-// The last two accept every step; the residual they leave is measured (one
-// more force evaluation per step) and reported, never enforced.
-enum class NewtonMode { newton, modified, initial, incremental, one_iteration };
-enum class Jacobian { analytic, finite_difference };
-
-
-inline const char* to_string(NewtonMode m) {
-  switch (m) {
-    case NewtonMode::newton: return "newton";
-    case NewtonMode::modified: return "modified";
-    case NewtonMode::initial: return "initial";
-    case NewtonMode::incremental: return "incremental";
-    case NewtonMode::one_iteration: return "one_iteration";
-  }
-  return "?";
-}
-inline const char* to_string(Jacobian j) { return j == Jacobian::analytic ? "analytic" : "finite_difference"; }
-
-
-// Options of the iteration: one validated object.
-struct Newton {
-  static constexpr const char* name = "Newton";
-  static constexpr const char* doc =
-      "Options of the Newton iteration of the implicit schemes: mode ('newton', 'modified', 'initial', "
-      "'incremental' or 'one_iteration'), max_iter, rtol (relative to the force scale of the step), atol "
-      "(force units), jacobian ('analytic' or 'finite_difference') and linear_solver ('auto', 'dense' or "
-      "'sparse'; Stats.linear_solver says which was used).";
-  NewtonMode mode = NewtonMode::newton;
-  int max_iter = 20;
-  double rtol = 1e-10;  // relative to the force scale of the step
-  double atol = 1e-12;  // absolute, in force units
-  Jacobian jacobian = Jacobian::analytic;
-  LinearSolverChoice linear_solver = LinearSolverChoice::automatic;
-
-  template <class Self, class V>
-  static void parameters(Self& s, V&& v) {
-    v(s.mode, param::choice("mode", "equilibrium iteration", {"newton", "modified", "initial", "incremental",
-                                                                "one_iteration"}));
-    v(s.max_iter, param::integer("max_iter", "iterations allowed per step").range(1, 1000));
-    v(s.rtol, param::real("rtol", "residual tolerance relative to the force scale of the step").at_least(0.0));
-    v(s.atol, param::real("atol", "absolute residual tolerance, in force units").at_least(0.0));
-    v(s.jacobian, param::choice("jacobian", "how the tangent is obtained", {"analytic", "finite_difference"}));
-    v(s.linear_solver, param::choice("linear_solver", "dense LU, sparse LDLT/LU, or chosen by size and density",
-                                     {"auto", "dense", "sparse"}));
-  }
-  void validate() const {
-    param::check_ranges(*this);
-    NVIB_CHECK(rtol > 0.0 || atol > 0.0, "rtol, atol", "at least one tolerance must be > 0");
-  }
-  // The modes that accept a step without an equilibrium check.
-  bool accepts_unconverged() const { return mode == NewtonMode::incremental || mode == NewtonMode::one_iteration; }
-};
 
 struct Residual {
   double norm = 0.0;   // max |r_i| (NaN if some entry is NaN)
   double scale = 0.0;  // the largest inertia or force term: the tolerance is atol + rtol scale
 };
 
-template <class LinearSolver = AutoLinearSolver>
+template <class LinearSolver = IterationSystem>
 class NewtonSolver {
  public:
   NewtonSolver() = default;

@@ -8,14 +8,14 @@
 #include <algorithm>
 #include <limits>
 
+#include "../base/types.hpp"
 #include "newton.hpp"
-#include "types.hpp"
 
 namespace nvib {
 
 template <class ModelT>
 class StaticEquilibrium {
-  using Solver = NewtonSolver<AutoLinearSolver>;
+  using Solver = NewtonSolver<IterationSystem>;
   friend Solver;
 
  public:
@@ -55,7 +55,7 @@ class StaticEquilibrium {
   IterationMatrix start_matrix() const { return matrix(); }
   // mu ~ a squared frequency: a thousandth of the stiffest DOF's, or 1 rad^2/s^2
   // where nothing is stiff yet (a body on open contacts).
-  bool regularize(IterationMatrix& im, AutoLinearSolver& ls) const {
+  bool regularize(IterationMatrix& im, IterationSystem& ls) const {
     if (im.cM > 0.0) return false;
     const Vector& m = model_.mass().diagonal_entries();
     const Vector k = ls.tangent_diagonal();
@@ -89,7 +89,7 @@ Vector static_equilibrium(ModelT& model, double t, const Vector& guess, double r
   opt.atol = 0.0;
   opt.max_iter = max_iter;
   opt.validate();
-  NewtonSolver<AutoLinearSolver> newton(opt, model.size());
+  NewtonSolver<IterationSystem> newton(opt, model.size());
   StaticEquilibrium<ModelT> problem(model, t, guess);
   Vector u(model.size());
   Stats st;

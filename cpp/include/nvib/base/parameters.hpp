@@ -15,7 +15,7 @@
 #include <limits>
 #include <string>
 
-#include "format.hpp"
+#include "errors.hpp"
 
 namespace nvib {
 namespace param {
