@@ -219,3 +219,17 @@ def test_absolute_acceleration_of_a_free_mass_is_zero():
     still = nvib.solve(nvib.Model([1.0], u0=[1.0], effects=[{"type": "spring", "measure": {0: 1.0}, "k": 1.0}]),
                        nvib.CEMDTS(), dt=0.01, t_end=0.1)
     assert still.absolute_a is still.a or np.array_equal(still.absolute_a, still.a)  # no ground: relative = absolute
+
+
+def test_shipped_record_is_what_its_generator_makes():
+    """The synthetic record SGM-1 shipped for the inelastic scenes is reproducible from its seed."""
+    import subprocess
+    import sys
+
+    script = os.path.join(os.path.dirname(__file__), "..", "..", "tools", "make_ground_motion.py")
+    record = os.path.join(os.path.dirname(nvib.__file__), "scenes", "records", "sgm1.AT2")
+    run = subprocess.run([sys.executable, script, "--check", "--out", record], capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 0, run.stdout + run.stderr
+    gm = nvib.GroundMotion.from_at2(record)
+    assert len(gm.t) == 3001 and gm.dt == pytest.approx(0.01) and gm.pga == pytest.approx(0.40, rel=1e-6)
