@@ -12,12 +12,16 @@ from ._names import GeneratedNames, NumberedNames
 from ._records import GroundMotion
 
 def _effect_parameters() -> dict[str, tuple[tuple[str, ...], dict[str, object]]]:
-    """(required, optional-with-default) parameters of each built-in effect type, from the C++ laws;
+    """(required, optional-with-default) parameters of each built-in effect type, from the C++ laws
+    (an optional parameter without a default, such as bouc_wen's ``dy`` beside ``fy``, has None);
     a law's signal (``irregularity``, ``signal``) is a parameter too (a table, see ``_signal``)."""
     out = {}
     for kind, law in _core.laws().items():
-        required = tuple(name for name, default in law["parameters"] if default is None)
-        optional = {name: default for name, default in law["parameters"] if default is not None}
+        required = tuple(name for name, default, _, may_be_unset, _ in law["parameters"]
+                         if default is None and not may_be_unset)
+        optional = {name: (choices.split("|")[0] if choices else default)
+                    for name, default, _, may_be_unset, choices in law["parameters"]
+                    if default is not None or may_be_unset}
         if law["signal"]:
             if law["signal_required"]:
                 required += (law["signal"],)
@@ -30,6 +34,8 @@ def _effect_parameters() -> dict[str, tuple[tuple[str, ...], dict[str, object]]]
 EFFECT_PARAMETERS = _effect_parameters()
 """Parameters of each built-in effect type: (required, optional with their defaults). Every effect may
 also carry a ``name`` and a free-text ``note``."""
+_CHOICES = {kind: {name: choices.split("|") for name, _, _, _, choices in law["parameters"] if choices}
+            for kind, law in _core.laws().items()}
 _COMMON_KEYS = ("type", "measure", "name", "note")
 _SIGNAL_KEYS = {"sine": (("amplitude", "omega"), {"phase": 0.0}), "table": (("t", "values"), {})}
 
@@ -76,6 +82,12 @@ def _law_parameters(where: str, kind: str, spec: dict, convert) -> tuple[dict, d
             continue
         if key == signal_key:
             signal = _signal(f"{where}.{key}", spec[key])
+        elif key in _CHOICES[kind]:  # a word, passed to the law as its place in the list
+            words = _CHOICES[kind][key]
+            if spec[key] not in words:
+                raise _checks.value_error(f"{where}.{key}", f"expected one of {', '.join(map(repr, words))}, "
+                                                            f"got {spec[key]!r}")
+            params[key] = float(words.index(spec[key]))
         else:
             params[key] = convert(f"{where}.{key}", spec[key])
     return params, signal

@@ -43,6 +43,9 @@ struct PyModel {
   const fx::EffectSet& effects() const {
     return python() ? std::get<1>(m).nonlinear_force().effects() : std::get<0>(m).nonlinear_force();
   }
+  fx::EffectSet& effects() {
+    return python() ? std::get<1>(m).nonlinear_force().effects() : std::get<0>(m).nonlinear_force();
+  }
 };
 
 inline nvib::Mass make_mass(const MassArray& m) {
@@ -66,11 +69,7 @@ inline nvib::Mass make_mass(const py::object& mass) {
   return make_mass(mass.cast<MassArray>());
 }
 
-inline fx::Law parse_law(const std::string& s) {
-  for (int k = 0; k < static_cast<int>(fx::AllLaws::size); ++k)
-    if (s == fx::to_string(static_cast<fx::Law>(k))) return static_cast<fx::Law>(k);
-  raise_value_error("type", "unknown effect type '" + s + "'");
-}
+inline fx::LawId parse_law(const std::string& s) { return fx::law_of(s); }
 
 inline fx::Signal make_signal(const std::string& kind, double amplitude, double omega, double phase,
                               std::vector<double> t, std::vector<double> values) {
@@ -80,31 +79,49 @@ inline fx::Signal make_signal(const std::string& kind, double amplitude, double 
   raise_value_error("signal.kind", "expected 'sine' or 'table', got '" + kind + "'");
 }
 
-// {type: {doc, parameters: [(name, default or None)], signal, signal_required, uses_velocity, is_load}}
+// {type: {doc, source, parameters: [(name, default or None, doc, may be unset, choices or None)], signal,
+//  signal_required, uses_displacement, uses_velocity, is_load, state: [names of the internal variables]}}
 inline py::dict laws() {
   py::dict out;
   fx::AllLaws::for_each([&](auto L) {
     using Lw = decltype(L);
     py::list params;
     for (const auto& p : Lw::parameters)
-      params.append(py::make_tuple(p.name, std::isnan(p.fallback) ? py::object(py::none()) : py::float_(p.fallback)));
+      params.append(py::make_tuple(p.name, std::isnan(p.fallback) ? py::object(py::none()) : py::float_(p.fallback),
+                                   p.doc, p.may_be_unset,
+                                   p.choices ? py::object(py::str(p.choices)) : py::object(py::none())));
+    py::list state;
+    for (const char* name : Lw::state_names) state.append(name);
     py::dict d;
     d["doc"] = Lw::doc;
+    d["source"] = Lw::source;
     d["parameters"] = params;
     d["signal"] = Lw::signal ? py::object(py::str(Lw::signal)) : py::object(py::none());
     d["signal_required"] = Lw::signal_required;
+    d["uses_displacement"] = Lw::uses_displacement;
     d["uses_velocity"] = Lw::uses_velocity;
     d["is_load"] = Lw::is_load;
-    out[fx::to_string(Lw::id)] = d;
+    d["state"] = state;
+    out[Lw::key] = d;
   });
   return out;
 }
 
+// A parameter's value as Python shows it: the word of a choice, else the number.
+inline py::object parameter_value(const fx::Parameter& p, double x) {
+  if (!p.choices) return py::float_(x);
+  std::string words = p.choices;
+  for (int k = 0; k < static_cast<int>(x); ++k) words = words.substr(words.find('|') + 1);
+  return py::str(words.substr(0, words.find('|')));
+}
+
+// The declared parameters by name (those left unset are absent).
 inline py::dict effect_parameters(const fx::Effect& e) {
   py::dict d;
   fx::dispatch(e.law, [&](auto L) {
     using Lw = decltype(L);
-    for (size_t k = 0; k < Lw::parameters.size(); ++k) d[Lw::parameters[k].name] = e.values[k];
+    for (size_t k = 0; k < Lw::parameters.size(); ++k)
+      if (!fx::is_unset(e.values[k])) d[Lw::parameters[k].name] = parameter_value(Lw::parameters[k], e.values[k]);
   });
   return d;
 }
@@ -164,12 +181,12 @@ inline fx::EffectArray make_array(const std::string& type, const py::array_t<std
   return fx::make_effect_array(parse_law(type), std::move(vi), std::move(vj), named, n, std::move(sig), name);
 }
 
-// The model's K (law spring) or C (law damper) with the linear arrays' entries added in.
-inline nvib::SparseMatrix linear_matrix(const PyModel& p, fx::Law law) {
+// The model's K (stiffness) or C with the linear arrays' entries added in.
+inline nvib::SparseMatrix linear_matrix(const PyModel& p, bool stiffness) {
   return p.visit([&](auto& md) {
-    const nvib::SparseMatrix& A = law == fx::Law::spring ? md.K() : md.C();
+    const nvib::SparseMatrix& A = stiffness ? md.K() : md.C();
     std::vector<Eigen::Triplet<double, int>> all;
-    p.effects().add_linear_array_entries(law, all);
+    p.effects().add_linear_array_entries(stiffness, all);
     if (all.empty()) return A.rows() ? A : nvib::SparseMatrix(md.size(), md.size());
     for (Index j = 0; j < A.outerSize(); ++j)
       for (nvib::SparseMatrix::InnerIterator it(A, j); it; ++it) all.emplace_back(it.row(), int(j), it.value());
@@ -222,7 +239,7 @@ inline void bind_models(py::module_& m) {
            py::arg("type"), py::arg("index"), py::arg("coef"), py::arg("parameters") = py::dict(), py::kw_only(),
            py::arg("name") = "", py::arg("signal") = "none", py::arg("amplitude") = 0.0, py::arg("omega") = 0.0,
            py::arg("phase") = 0.0, py::arg("t") = std::vector<double>{}, py::arg("values") = std::vector<double>{})
-      .def_property_readonly("type", [](const Effect& e) { return fx::to_string(e.law); })
+      .def_property_readonly("type", [](const Effect& e) { return e.key(); })
       .def_readonly("name", &Effect::name)
       .def_readonly("index", &Effect::index)
       .def_readonly("coef", &Effect::coef)
@@ -231,9 +248,11 @@ inline void bind_models(py::module_& m) {
       .def_property_readonly("uses_time", &Effect::uses_time)
       .def_property_readonly("is_linear", &Effect::is_linear)
       .def_property_readonly("is_load", &Effect::is_load)
-      .def("value", &Effect::value, py::arg("d"), py::arg("dd"), py::arg("t"), "the law f(d, d', t)")
+      .def_property_readonly("has_state", &Effect::has_state, "the law has memory (internal variables)")
+      .def("value", &Effect::value, py::arg("d"), py::arg("dd"), py::arg("t"),
+           "the law f(d, d', t) (from its initial state, for a law with memory)")
       .def("__repr__", [](const Effect& e) {
-        return std::string("Effect(") + fx::to_string(e.law) + (e.name.empty() ? "" : ", name='" + e.name + "'") + ")";
+        return std::string("Effect(") + e.key() + (e.name.empty() ? "" : ", name='" + e.name + "'") + ")";
       });
 
   py::class_<fx::EffectArray>(m, "EffectArray",
@@ -243,7 +262,7 @@ inline void bind_models(py::module_& m) {
            py::kw_only(), py::arg("name") = "", py::arg("signal") = "none", py::arg("amplitude") = 0.0,
            py::arg("omega") = 0.0, py::arg("phase") = 0.0, py::arg("t") = std::vector<double>{},
            py::arg("values") = std::vector<double>{})
-      .def_property_readonly("type", [](const fx::EffectArray& a) { return fx::to_string(a.law); })
+      .def_property_readonly("type", [](const fx::EffectArray& a) { return a.key(); })
       .def_readonly("name", &fx::EffectArray::name)
       .def_property_readonly("size", &fx::EffectArray::size)
       .def("__len__", &fx::EffectArray::size)
@@ -255,7 +274,8 @@ inline void bind_models(py::module_& m) {
           using Lw = decltype(L);
           for (size_t k = 0; k < Lw::parameters.size(); ++k) {
             const auto& v = a.values[k];
-            d[Lw::parameters[k].name] = v.size() == 1 ? py::object(py::float_(v[0]))
+            if (v.size() == 1 && fx::is_unset(v[0])) continue;
+            d[Lw::parameters[k].name] = v.size() == 1 ? parameter_value(Lw::parameters[k], v[0])
                                                       : py::object(py::array_t<double>(v.size(), v.data()));
           }
         });
@@ -265,8 +285,9 @@ inline void bind_models(py::module_& m) {
       .def_property_readonly("uses_time", &fx::EffectArray::uses_time)
       .def_property_readonly("is_linear", &fx::EffectArray::is_linear)
       .def_property_readonly("is_load", &fx::EffectArray::is_load)
+      .def_property_readonly("has_state", &fx::EffectArray::has_state, "the law has memory (internal variables)")
       .def("__repr__", [](const fx::EffectArray& a) {
-        return std::string("EffectArray(") + fx::to_string(a.law) + ", " + std::to_string(a.size()) + " effects" +
+        return std::string("EffectArray(") + a.key() + ", " + std::to_string(a.size()) + " effects" +
                (a.name.empty() ? "" : ", name='" + a.name + "'") + ")";
       });
 
@@ -295,10 +316,15 @@ inline void bind_models(py::module_& m) {
       })
       .def_property_readonly("mass_matrix", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().matrix(); }); })
       .def_property_readonly("mass_sparse", [](const PyModel& p) { return p.visit([](auto& md) { return md.mass().sparse_matrix(); }); })
-      .def_property_readonly("K", [](const PyModel& p) { return linear_matrix(p, fx::Law::spring); },
+      .def_property_readonly("K", [](const PyModel& p) { return linear_matrix(p, true); },
                              "the linear stiffness: K given, linear springs (those of arrays included)")
-      .def_property_readonly("C", [](const PyModel& p) { return linear_matrix(p, fx::Law::damper); },
+      .def_property_readonly("C", [](const PyModel& p) { return linear_matrix(p, false); },
                              "the linear damping: C given, linear dampers (those of arrays included)")
+      .def_property_readonly("has_state", [](const PyModel& p) { return p.visit([](auto& md) { return md.has_state(); }); },
+                             "some law has memory (internal variables)")
+      .def_property_readonly("state_size", [](const PyModel& p) { return p.visit([](auto& md) { return md.state_size(); }); })
+      .def("_verify_commits", [](PyModel& p, bool on) { p.effects().verify_commits(on); }, py::arg("on"),
+           "tests: check every commit of a last trial against a new trial at the accepted state")
       .def_property_readonly("has_sparse_tangent", [](const PyModel& p) {
         return p.visit([](auto& md) { return md.has_sparse_tangent(); });
       })

@@ -170,9 +170,9 @@ int main() {
       i0.push_back(i), j0.push_back(i - 1), i1.push_back(i);  // j = -1: the first spring holds DOF 0 to the ground
     }
     std::vector<nvib::effects::EffectArray> arrays{
-        nvib::effects::make_effect_array(nvib::effects::Law::hardening_spring, i0, j0, {{"k0", {100.0}}, {"a", {30.0}}}, m),
-        nvib::effects::make_effect_array(nvib::effects::Law::power_damper, i1, {}, {{"c", {0.5}}, {"p", {1.5}}}, m),
-        nvib::effects::make_effect_array(nvib::effects::Law::spring, i0, j0, {{"k", {10.0}}}, m)};
+        nvib::effects::make_effect_array("hardening_spring", i0, j0, {{"k0", {100.0}}, {"a", {30.0}}}, m),
+        nvib::effects::make_effect_array("power_damper", i1, {}, {{"c", {0.5}}, {"p", {1.5}}}, m),
+        nvib::effects::make_effect_array("spring", i0, j0, {{"k", {10.0}}}, m)};
     std::vector<nvib::effects::Effect> loads{nvib::effects::harmonic_force({{0, 1.0}}, 10.0, 3.0)};
     all_schemes("sparse mass, sparse K", nvib::make_linear_model(nvib::Mass::sparse(Ms), Ks));
     all_schemes("effect arrays, diagonal mass",

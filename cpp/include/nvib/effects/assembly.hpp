@@ -18,7 +18,8 @@ namespace effects {
 // Python callables through the binding): f = effects + extra. Flags are
 // or-ed (linear only if both are); the tangent is analytic only if both have
 // one (the model differentiates the sum otherwise); energy is accounted
-// only if both account for it.
+// only if both account for it; the states of laws with memory are the
+// effects' followed by the extra force's (if it has any).
 template <class Extra>
 class EffectsPlus {
  public:
@@ -32,6 +33,7 @@ class EffectsPlus {
   }
 
   const EffectSet& effects() const { return effects_; }
+  EffectSet& effects() { return effects_; }
   Extra& extra() { return extra_; }
   const Extra& extra() const { return extra_; }
 
@@ -73,6 +75,41 @@ class EffectsPlus {
   bool uses_time() const { return effects_.uses_time() || traits::uses_time(extra_); }
   bool is_linear() const { return effects_.is_linear() && traits::is_linear(extra_); }
 
+  // ---- memory ----
+  bool has_state() const { return effects_.has_state() || extra_state(); }
+  Index state_size() const {
+    Index n = effects_.state_size();
+    if constexpr (traits::has_state_methods<Extra>::value) n += extra_.state_size();
+    return n;
+  }
+  void get_state(double* out) const {
+    effects_.get_state(out);
+    if constexpr (traits::has_state_methods<Extra>::value) extra_.get_state(out + effects_.state_size());
+  }
+  void set_state(const double* x) {
+    effects_.set_state(x);
+    if constexpr (traits::has_state_methods<Extra>::value) extra_.set_state(x + effects_.state_size());
+  }
+  void reset_state() {
+    effects_.reset_state();
+    if constexpr (traits::has_state_methods<Extra>::value) extra_.reset_state();
+  }
+  void commit_last_trial(const double* u, const double* v, double t) {
+    if (effects_.has_state()) effects_.commit_last_trial(u, v, t);
+    if constexpr (traits::has_state_methods<Extra>::value)
+      if (extra_.has_state()) extra_.commit_last_trial(u, v, t);
+  }
+  void commit_at(const double* u, const double* v, double t) {
+    if (effects_.has_state()) effects_.commit_at(u, v, t);
+    if constexpr (traits::has_state_methods<Extra>::value)
+      if (extra_.has_state()) extra_.commit_at(u, v, t);
+  }
+  double hysteretic_dissipation() const {
+    double e = effects_.hysteretic_dissipation();
+    if constexpr (traits::has_hysteresis<Extra>::value) e += extra_.hysteretic_dissipation();
+    return e;
+  }
+
   bool accounts_energy() const {
     if constexpr (traits::has_energy<Extra>::value) return traits::accounts_energy(extra_);
     return false;
@@ -95,6 +132,10 @@ class EffectsPlus {
   }
 
  private:
+  bool extra_state() const {
+    if constexpr (traits::has_state_methods<Extra>::value) return extra_.has_state();
+    return false;
+  }
   EffectSet effects_;
   Extra extra_;
   Vector work_;     // the extra force

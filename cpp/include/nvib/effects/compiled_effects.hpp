@@ -1,30 +1,30 @@
-// The declared effects, compiled once and never changed after: linear springs
-// and dampers assembled into K and C (with a LinearParts to assemble into),
-// constant loads into a constant vector, the other effects compiled into flat
-// terms grouped by law and by how their measures are stored
-// (compiled_terms.hpp). EffectSet (effect_set.hpp) evaluates them; its copies
-// share one CompiledEffects, so a model copied into each stepper costs no
-// memory for its effects.
+// The declared effects, compiled once and never changed after: the linear ones with constant slopes
+// (single springs, dampers, P-delta) assembled into K and C (given a LinearParts to assemble into),
+// constant loads into a constant vector, the others into groups of one law and one measure storage
+// (kernels.hpp), single effects and arrays alike. EffectSet (effect_set.hpp) evaluates them; its
+// copies share one CompiledEffects, so a model copied into each stepper costs no memory for its
+// effects, only for their states.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <memory>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "../base/interrupt.hpp"
 #include "../model/mass.hpp"
-#include "array_kernels.hpp"
-#include "compiled_terms.hpp"
 #include "effect.hpp"
-#include "effect_array.hpp"
+#include "kernels.hpp"
 
 namespace nvib {
 namespace effects {
 
-// Where linear springs and dampers are assembled: their entries (row, column, value), summed into
-// sparse K and C by to_matrices() (each empty if nothing went into it).
+// Where linear effects with constant slopes are assembled: their entries (row, column, value),
+// summed into sparse K and C by to_matrix() (each empty if nothing went into it).
 struct LinearParts {
   std::vector<Eigen::Triplet<double, int>> k, c;
 
@@ -40,75 +40,94 @@ struct LinearParts {
 
 class CompiledEffects {
  public:
+  static constexpr std::size_t npos = std::numeric_limits<std::size_t>::max();
+  // Where an evaluated effect sits: its group and its place in it.
+  struct Place {
+    std::size_t group = npos, k = 0;
+  };
+
   CompiledEffects() = default;  // no effects
   // `mass` turns ground accelerations' influence vectors r into M r. Effects come one by one (list)
   // and as arrays of one law (arrays).
   CompiledEffects(std::vector<Effect> list, const Mass& mass, LinearParts* linear = nullptr,
-            std::vector<EffectArray> arrays = {})
+                  std::vector<EffectArray> arrays = {})
       : all_(std::move(list)), arrays_(std::move(arrays)) {
     const Index n = mass.size();
-    a_.f_const.setZero(n);
-    for (size_t q = 0; q < arrays_.size(); ++q) take_array(q, linear);
+    f_const_.setZero(n);
+    for (const EffectArray& a : arrays_) take_array(a);
+    std::vector<std::size_t> active;
     for (size_t i = 0; i < all_.size(); ++i) {
       Effect& e = all_[i];
       for (Index d : e.index)
         NVIB_CHECK(d < n, "effects[" + std::to_string(i) + "].measure",
                    "DOF index " + std::to_string(d) + " is out of range for " + std::to_string(n) +
                        " degrees of freedom");
-      if (e.law == Law::ground_acceleration) to_mass_weighted(e, mass);
+      if (e.law == law_id<GroundAcceleration>()) to_mass_weighted(e, mass);
       if (e.index.empty()) continue;  // a measure that is zero (a ground motion moving no mass) acts on nothing
       uses_time_ = uses_time_ || e.uses_time();
       linear_ = linear_ && e.is_linear();
-      if (linear && (e.law == Law::spring || e.law == Law::damper)) {
-        assemble(e, e.law == Law::spring ? linear->k : linear->c);
+      const bool assembled = dispatch(e.law, [](auto L) { return decltype(L)::assembled; });
+      if (linear && assembled) {
+        assemble(e, *linear);
         continue;
       }
-      if (e.law == Law::constant_force) {
-        for (size_t k = 0; k < e.index.size(); ++k) a_.f_const[e.index[k]] -= e.coef[k] * e.p0;
+      if (e.law == law_id<ConstantForce>()) {
+        for (size_t k = 0; k < e.index.size(); ++k) f_const_[e.index[k]] -= e.coef[k] * e.values[0];
         continue;
       }
-      active_.push_back(i);
-      active_velocity_ = active_velocity_ || e.uses_velocity();
+      active.push_back(i);
+      velocity_ = velocity_ || e.uses_velocity();
     }
-    compile();
+    places_.assign(all_.size(), Place{});
+    compile(active, n);
   }
 
-  CompiledEffects(const CompiledEffects&) = delete;  // the terms point into this object
+  CompiledEffects(const CompiledEffects&) = delete;  // the groups point into this object
   CompiledEffects& operator=(const CompiledEffects&) = delete;
 
   const std::vector<Effect>& effects() const { return all_; }
   const std::vector<EffectArray>& arrays() const { return arrays_; }
   // Effects evaluated each step, single ones and those of arrays.
   size_t num_evaluated() const {
-    size_t k = active_.size();
-    for (size_t q : active_arrays_) k += arrays_[q].size();
+    size_t k = 0;
+    for (const kernels::Group& g : groups_) k += g.size;
     return k;
   }
-  const Vector& constant_load() const { return a_.f_const; }  // -P of the constant loads
-  const compiled::Arrays& arrays_of_terms() const { return a_; }
-  const std::vector<compiled::Group>& groups() const { return groups_; }
-  const std::vector<arrays::ArrayGroup>& array_groups() const { return array_groups_; }
-  bool uses_velocity() const { return active_velocity_; }
+  const Vector& constant_load() const { return f_const_; }  // -P of the constant loads
+  const std::vector<kernels::Group>& groups() const { return groups_; }
+  bool uses_velocity() const { return velocity_; }
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return linear_; }
+  // The internal variables of the laws with memory, all effects' one after the other, as the laws
+  // start (the committed states of each model copy begin as this).
+  bool has_state() const { return !initial_state_.empty(); }
+  const std::vector<double>& initial_state() const { return initial_state_; }
+  // Where single effect i and array q are evaluated (group npos: assembled, a constant load, or nothing).
+  const Place& place_of_effect(size_t i) const { return places_[i]; }
+  std::size_t group_of_array(size_t q) const { return array_groups_[q]; }
 
  private:
-  // An array: constant loads into the constant vector, the rest evaluated each step by the array
-  // kernels (array_kernels.hpp), linear springs and dampers included.
-  void take_array(size_t q, LinearParts*) {
-    const EffectArray& e = arrays_[q];
-    if (e.size() == 0) return;
-    uses_time_ = uses_time_ || e.uses_time();
-    linear_ = linear_ && e.is_linear();
-    if (e.law == Law::constant_force) {
-      for (size_t k = 0; k < e.size(); ++k) {
-        a_.f_const[e.i[k]] -= e.value(0, k);
-        if (e.j[k] >= 0) a_.f_const[e.j[k]] += e.value(0, k);
+  // The storage of one group's measures and parameters (arrays keep their own index arrays).
+  struct Store {
+    std::vector<std::int32_t> i, j, first;
+    std::vector<Index> idx;
+    std::vector<double> c, coef, rows;
+    std::unique_ptr<unsigned char[]> params;
+  };
+
+  // An array's constant loads go into the constant vector; the rest is evaluated each step.
+  void take_array(const EffectArray& a) {
+    if (a.size() == 0) return;
+    uses_time_ = uses_time_ || a.uses_time();
+    linear_ = linear_ && a.is_linear();
+    if (a.law == law_id<ConstantForce>()) {
+      for (size_t k = 0; k < a.size(); ++k) {
+        f_const_[a.i[k]] -= a.value(0, k);
+        if (a.j[k] >= 0) f_const_[a.j[k]] += a.value(0, k);
       }
       return;
     }
-    active_arrays_.push_back(q);
-    active_velocity_ = active_velocity_ || e.uses_velocity();
+    velocity_ = velocity_ || a.uses_velocity();
   }
 
   // A ground acceleration acts as g^T a_g(t) with g = M r.
@@ -125,119 +144,163 @@ class CompiledEffects {
         e.coef.push_back(w[d]);
       }
   }
-  static void assemble(const Effect& e, std::vector<Eigen::Triplet<double, int>>& entries) {
+  // K += df/dd g g^T, C += df/dd' g g^T (constant slopes).
+  static void assemble(const Effect& e, LinearParts& lin) {
+    const Slopes s = e.slopes(0.0, 0.0, 0.0);
+    const bool disp = e.uses_displacement(), vel = e.uses_velocity();
     for (size_t i = 0; i < e.index.size(); ++i)
-      for (size_t j = 0; j < e.index.size(); ++j)
-        entries.emplace_back(static_cast<int>(e.index[i]), static_cast<int>(e.index[j]),
-                             e.p0 * e.coef[i] * e.coef[j]);
+      for (size_t j = 0; j < e.index.size(); ++j) {
+        const int r = static_cast<int>(e.index[i]), c = static_cast<int>(e.index[j]);
+        if (disp) lin.k.emplace_back(r, c, s.kd * e.coef[i] * e.coef[j]);
+        if (vel) lin.c.emplace_back(r, c, s.kv * e.coef[i] * e.coef[j]);
+      }
   }
 
-  // Flat, grouped form of the evaluated effects, single ones and those of arrays.
-  void compile() {
-    using namespace compiled;
-    a_.n = a_.f_const.size();
-    a_.no_constant_load = a_.f_const.size() == 0 || a_.f_const.cwiseAbs().maxCoeff() == 0.0;
-    const Index n = a_.n;
-    // One source per evaluated single effect (the arrays keep their own form, below).
+  static kernels::Storage single_storage(const Effect& e, Index n) {
+    using namespace kernels;
+    const Index m = static_cast<Index>(e.index.size());
+    if (m == 1 && e.coef[0] == 1.0) return ground;
+    if (m == 2 && e.coef[0] == 1.0 && e.coef[1] == -1.0 && e.index[0] != e.index[1]) return pair;
+    if (m <= 2) return two;
+    if (2 * m < n) return sparse;
+    return e.is_load() ? dense_first : dense;  // a load's force needs no measure
+  }
+
+  // Groups of the evaluated single effects (dense loads first, then by law and storage, in the
+  // order declared within each), then one group per evaluated array, in order.
+  void compile(const std::vector<std::size_t>& active, Index n) {
+    using namespace kernels;
     struct Source {
-      std::int32_t array;
-      std::uint32_t k;
-      Law law;
+      std::size_t effect;
+      LawId law;
       Storage storage;
     };
-    auto single_storage = [&](const Effect& e) {
-      const Index m = static_cast<Index>(e.index.size());
-      if (m == 1 && e.coef[0] == 1.0) return unit;
-      if (m == 2 && e.coef[0] == 1.0 && e.coef[1] == -1.0 && e.index[0] != e.index[1]) return difference;
-      if (m == 0) return sparse;  // (not evaluated: see the constructor)
-      if (m <= 2) return two;
-      if (2 * m < n) return sparse;
-      return e.is_load() ? dense_first : dense;  // a load's force needs no measure
-    };
     std::vector<Source> sources;
-    const size_t total = active_.size();
-    sources.reserve(total);
-    for (size_t i : active_)
-      sources.push_back({-1, static_cast<std::uint32_t>(i), all_[i].law, single_storage(all_[i])});
-    // Dense loads first, then by law and storage: each group is one instantiated loop.
+    sources.reserve(active.size());
+    for (std::size_t i : active) sources.push_back({i, all_[i].law, single_storage(all_[i], n)});
     std::stable_sort(sources.begin(), sources.end(), [](const Source& a, const Source& b) {
       const bool fa = a.storage == dense_first, fb = b.storage == dense_first;
       if (fa != fb) return fa;
       return a.law != b.law ? a.law < b.law : a.storage < b.storage;
     });
-    a_.idx.clear();
-    a_.coef.clear();
-    a_.rows.clear();
-    terms_.clear();
-    terms_.reserve(total);
-    for (const Source& src : sources) {
-      if ((terms_.size() & 0xFFFF) == 0) poll_interrupt();  // large models: every 65536 terms
-      Term c;
-      c.first = static_cast<std::int32_t>(a_.idx.size());
-      const Effect& e = all_[src.k];
-      if (!e.index.empty()) c.i0 = c.i1 = static_cast<std::int32_t>(e.index[0]);
-      if (e.index.size() > 1) c.i1 = static_cast<std::int32_t>(e.index[1]);
-      if (src.storage != unit && src.storage != difference) {
-        a_.idx.insert(a_.idx.end(), e.index.begin(), e.index.end());
-        a_.coef.insert(a_.coef.end(), e.coef.begin(), e.coef.end());
-        if (src.storage == two && e.index.size() == 1) {  // "two" always reads two entries: a zero second one
-          a_.idx.push_back(e.index[0]);
-          a_.coef.push_back(0.0);
+    std::size_t state_size = 0;
+    for (std::size_t b = 0; b < sources.size();) {
+      std::size_t e = b;
+      while (e < sources.size() && sources[e].law == sources[b].law && sources[e].storage == sources[b].storage) ++e;
+      dispatch(sources[b].law, [&](auto L) {
+        using Lw = decltype(L);
+        Store& st = stores_.emplace_back();
+        Group g;
+        g.law = sources[b].law;
+        g.storage = sources[b].storage;
+        g.size = e - b;
+        g.n = n;
+        auto* P = new_params<Lw>(st, g.size);
+        if (g.storage == sparse || g.storage == dense || g.storage == dense_first) st.first.push_back(0);
+        for (std::size_t q = b; q < e; ++q) {
+          if (((q - b) & 0xFFFF) == 0) poll_interrupt();  // large models: every 65536 effects
+          const Effect& ef = all_[sources[q].effect];
+          places_[sources[q].effect] = Place{groups_.size(), q - b};
+          new (P + (q - b)) typename Lw::Params(ef.template params<Lw>());
+          switch (g.storage) {
+            case ground: st.i.push_back(static_cast<std::int32_t>(ef.index[0])); break;
+            case pair:
+              st.i.push_back(static_cast<std::int32_t>(ef.index[0]));
+              st.j.push_back(static_cast<std::int32_t>(ef.index[1]));
+              break;
+            case two:  // always two entries: a zero second one for a single DOF
+              st.i.push_back(static_cast<std::int32_t>(ef.index[0]));
+              st.j.push_back(static_cast<std::int32_t>(ef.index.size() > 1 ? ef.index[1] : ef.index[0]));
+              st.c.push_back(ef.coef[0]);
+              st.c.push_back(ef.index.size() > 1 ? ef.coef[1] : 0.0);
+              break;
+            default:
+              st.idx.insert(st.idx.end(), ef.index.begin(), ef.index.end());
+              st.coef.insert(st.coef.end(), ef.coef.begin(), ef.coef.end());
+              st.first.push_back(static_cast<std::int32_t>(st.idx.size()));
+              if (g.storage != sparse) {
+                const std::size_t at = st.rows.size();
+                st.rows.resize(at + static_cast<std::size_t>(n), 0.0);
+                for (size_t k = 0; k < ef.index.size(); ++k) st.rows[at + static_cast<std::size_t>(ef.index[k])] += ef.coef[k];
+              }
+          }
         }
-      }
-      c.last = static_cast<std::int32_t>(a_.idx.size());
-      if (src.storage == dense || src.storage == dense_first) {
-        c.offset = static_cast<Index>(a_.rows.size());
-        a_.rows.resize(a_.rows.size() + static_cast<size_t>(n), 0.0);
-        for (size_t k = 0; k < e.index.size(); ++k)
-          a_.rows[static_cast<size_t>(c.offset + e.index[k])] += e.coef[k];
-      }
-      c.p = e.params();
-      terms_.push_back(c);
+        finish_group<Lw>(g, st, state_size);
+      });
+      b = e;
     }
-    // The arrays: their own kernels over their own index arrays.
-    array_groups_.clear();
-    per_params_.clear();
-    for (size_t q : active_arrays_) {
-      const EffectArray& e = arrays_[q];
-      arrays::ArrayGroup g;
-      g.law = e.law;
-      g.i = e.i.data();
-      g.j = e.j.data();
-      g.size = e.size();
-      bool varying = false;
-      for (const auto& v : e.values) varying = varying || v.size() > 1;
-      g.uniform = e.params(0);
-      if (varying) {
-        std::vector<LawParams> per(e.size());
-        for (size_t k = 0; k < e.size(); ++k) per[k] = e.params(k);
-        per_params_.push_back(std::move(per));
-        g.per = per_params_.back().data();
-      }
-      g.kernel = arrays::kernel_for(e.law, !varying);
-      array_groups_.push_back(g);
+    if (!groups_.empty() && groups_.front().storage == dense_first) {
+      groups_.front().writes = true;
+      const bool none = f_const_.size() == 0 || f_const_.cwiseAbs().maxCoeff() == 0.0;
+      groups_.front().constant_load = none ? nullptr : f_const_.data();
     }
-    groups_.clear();
-    for (size_t i = 0; i < terms_.size(); ++i) {
-      const Law law = sources[i].law;
-      const Storage st = sources[i].storage;
-      if (groups_.empty() || groups_.back().law != law || groups_.back().storage != st)
-        groups_.push_back({law, st, kernel_for(law, st), &terms_[i], &terms_[i], false});
-      groups_.back().end = &terms_[i] + 1;
+    // The arrays: their own index arrays, parameters uniform or one set per effect.
+    array_groups_.assign(arrays_.size(), npos);
+    for (size_t q = 0; q < arrays_.size(); ++q) {
+      const EffectArray& a = arrays_[q];
+      if (a.size() == 0 || a.law == law_id<ConstantForce>()) continue;
+      dispatch(a.law, [&](auto L) {
+        using Lw = decltype(L);
+        Store& st = stores_.emplace_back();
+        Group g;
+        g.law = a.law;
+        g.storage = mixed;
+        g.size = a.size();
+        g.n = n;
+        g.i = a.i.data();
+        g.j = a.j.data();
+        g.uniform = !a.varying();
+        const Signal* s = a.signal.present() ? &a.signal : nullptr;
+        auto* P = new_params<Lw>(st, g.uniform ? 1 : g.size);
+        for (size_t k = 0; k < (g.uniform ? 1 : g.size); ++k) new (P + k) typename Lw::Params(a.template params<Lw>(k, s));
+        array_groups_[q] = groups_.size();
+        finish_group<Lw>(g, st, state_size);
+      });
     }
-    if (!groups_.empty() && groups_.front().storage == dense_first) groups_.front().writes = true;
+  }
+
+  template <class L>
+  static typename L::Params* new_params(Store& st, std::size_t count) {
+    static_assert(std::is_trivially_copyable_v<typename L::Params> && std::is_trivially_destructible_v<typename L::Params>,
+                  "a law's Params is plain data");
+    static_assert(alignof(typename L::Params) <= alignof(std::max_align_t), "over-aligned Params");
+    st.params.reset(new unsigned char[sizeof(typename L::Params) * std::max<std::size_t>(count, 1)]);
+    return reinterpret_cast<typename L::Params*>(st.params.get());
+  }
+
+  // Points the group at its store, gives it its kernel and its place in the state buffers.
+  template <class L>
+  void finish_group(kernels::Group& g, Store& st, std::size_t& state_size) {
+    using namespace kernels;
+    if (g.storage != mixed) {
+      g.i = st.i.empty() ? nullptr : st.i.data();
+      g.j = st.j.empty() ? nullptr : st.j.data();
+    }
+    g.c = st.c.empty() ? nullptr : st.c.data();
+    g.first = st.first.empty() ? nullptr : st.first.data();
+    g.idx = st.idx.empty() ? nullptr : st.idx.data();
+    g.coef = st.coef.empty() ? nullptr : st.coef.data();
+    g.rows = st.rows.empty() ? nullptr : st.rows.data();
+    g.params = st.params.get();
+    g.kernel = force_kernel<L>(g.storage, g.uniform);
+    if constexpr (law::has_state<L>) {
+      g.state = state_size;
+      state_size += g.size * law::state_width<L>();
+      initial_state_.resize(state_size);
+      for (std::size_t k = 0; k < g.size; ++k) g.store_state<L>(initial_state_.data(), k, law::initial<L>(g.params_of<L>(k)));
+    }
+    groups_.push_back(g);
   }
 
   std::vector<Effect> all_;
-  std::vector<size_t> active_;         // the single effects evaluated each step (in all_)
   std::vector<EffectArray> arrays_;
-  std::vector<size_t> active_arrays_;  // the arrays evaluated each step
-  compiled::Arrays a_;
-  bool uses_time_ = false, linear_ = true, active_velocity_ = false;
-  std::vector<compiled::Term> terms_;
-  std::vector<compiled::Group> groups_;
-  std::vector<arrays::ArrayGroup> array_groups_;
-  std::vector<std::vector<LawParams>> per_params_;  // arrays whose parameters vary: one set per effect
+  Vector f_const_;  // -P of the constant loads
+  bool uses_time_ = false, linear_ = true, velocity_ = false;
+  std::vector<Store> stores_;
+  std::vector<kernels::Group> groups_;
+  std::vector<Place> places_;
+  std::vector<std::size_t> array_groups_;
+  std::vector<double> initial_state_;
 };
 
 }  // namespace effects

@@ -1,22 +1,27 @@
-// EffectSet: the declared effects as a force functor for Model, a handle on
-// their compiled form (compiled_effects.hpp) shared by its copies.
+// EffectSet: the declared effects as a force functor for Model: a handle on their compiled form
+// (compiled_effects.hpp), shared by its copies, and the states of its laws with memory, its own.
 //
-// Every effect it is given acts: with a LinearParts to assemble into, linear
-// springs and dampers go into K and C once; without one they are evaluated
-// like the rest. Constant loads go into a constant vector; the other effects
-// are compiled once into flat terms grouped by law and by how their measures
-// are stored (compiled_terms.hpp): one indirect call per group, never per
-// effect, and no switch in the loop. A load reads no measure, a spring no velocity.
+// Every effect it is given acts: with a LinearParts to assemble into, linear effects with constant
+// slopes go into K and C once; without one they are evaluated like the rest. Constant loads go
+// into a constant vector; the other effects are evaluated group by group (kernels.hpp).
 //
-// The force vector is first *written* (constant loads plus the dense loads,
-// which need no state) and then accumulated into. Zeroing it first is a
-// memset call whose wide stores the effects' narrow read-modify-writes then
-// wait on; measured 30% slower on the building scene.
+// The force vector is first *written* (constant loads plus the dense loads, which need no state)
+// and then accumulated into. Zeroing it first is a memset call whose wide stores the effects'
+// narrow read-modify-writes then wait on; measured 30% slower on the building scene.
+//
+// State (laws with memory): each copy holds the committed internal variables of every effect and
+// a trial buffer. An evaluation of the force is a pure trial: it reads the committed states and
+// writes the trial states, nothing else; tangents and energies read the committed states only.
+// commit() makes a trial the committed state, once per accepted step (StepperBase::advance):
+// either the trial of the last force evaluation (a swap), when the scheme's last evaluation was at
+// the accepted state, or a new trial at the accepted state. A model without memory has empty
+// buffers and commit() does nothing.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -32,19 +37,36 @@ class EffectSet {
   // and as arrays of one law (arrays).
   EffectSet(std::vector<Effect> list, const Mass& mass, LinearParts* linear = nullptr,
             std::vector<EffectArray> arrays = {})
-      : c_(std::make_shared<const CompiledEffects>(std::move(list), mass, linear, std::move(arrays))) {}
+      : c_(std::make_shared<const CompiledEffects>(std::move(list), mass, linear, std::move(arrays))),
+        committed_(c_->initial_state()),
+        trial_(c_->initial_state()) {}
 
   const std::vector<Effect>& effects() const { return c_->effects(); }
   const std::vector<EffectArray>& arrays() const { return c_->arrays(); }
+  const CompiledEffects& compiled() const { return *c_; }
   size_t num_evaluated() const { return c_->num_evaluated(); }  // single effects and those of arrays
   const Vector& constant_load() const { return c_->constant_load(); }  // -P of the constant loads
-  // The entries of the linear springs (law spring) or dampers (law damper) of the arrays, which are
-  // evaluated by their kernels rather than assembled: added to K or C where those are shown.
-  void add_linear_array_entries(Law law, std::vector<Eigen::Triplet<double, int>>& out) const {
-    for (const arrays::ArrayGroup& g : c_->array_groups())
-      if (g.law == law)
-        for (size_t k = 0; k < g.size; ++k)
-          arrays::for_each_pair(g, k, [&](int r, int col, double gg) { out.emplace_back(r, col, gg * g.params(k).p0); });
+  // The entries of the arrays' linear effects with constant slopes (springs, dampers), which are
+  // evaluated by their kernels rather than assembled: added to K (stiffness) or C where those are shown.
+  void add_linear_array_entries(bool stiffness, std::vector<Eigen::Triplet<double, int>>& out) const {
+    for (size_t q = 0; q < arrays().size(); ++q) {
+      const std::size_t gi = c_->group_of_array(q);
+      if (gi == CompiledEffects::npos) continue;
+      const kernels::Group& g = c_->groups()[gi];
+      dispatch(g.law, [&](auto L) {
+        using Lw = decltype(L);
+        if constexpr (Lw::assembled) {
+          if (stiffness ? !Lw::uses_displacement : !Lw::uses_velocity) return;
+          for (size_t k = 0; k < g.size; ++k) {
+            const Slopes s = law::slopes<Lw>(g.params_of<Lw>(k), typename Lw::State{}, 0.0, 0.0, 0.0);
+            const double x = stiffness ? s.kd : s.kv;
+            g.for_each_entry(k, [&](Index r, double gr) {
+              g.for_each_entry(k, [&](Index c, double gc) { out.emplace_back(int(r), int(c), x * (gr * gc)); });
+            });
+          }
+        }
+      });
+    }
   }
 
   void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
@@ -52,22 +74,22 @@ class EffectSet {
   }
   // The same on contiguous storage of size(): Model calls it with its vectors' data, no Eigen::Ref formed.
   void eval(const double* up, const double* vp, double t, double* op) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    auto g = c_->groups().begin();
-    if (g != c_->groups().end() && g->writes) {
-      g->kernel(a, *g, up, vp, t, op);  // writes constant loads + its loads
+    const auto& groups = c_->groups();
+    const double* committed = committed_.data();
+    double* trial = trial_.data();
+    auto g = groups.begin();
+    if (g != groups.end() && g->writes) {
+      g->kernel(*g, up, vp, t, op, committed, trial);  // writes constant loads + its loads
       ++g;
     } else {
       // A stored zero the compiler cannot see through keeps this a plain loop, not memcpy.
-      const double* base = a.f_const.data();
+      const double* base = c_->constant_load().data();
       const double z = opaque_zero_;
-      for (Index i = 0; i < a.n; ++i) op[i] = base[i] + z;
+      for (Index i = 0, n = c_->constant_load().size(); i < n; ++i) op[i] = base[i] + z;
     }
-    for (; g != c_->groups().end(); ++g) g->kernel(a, *g, up, vp, t, op);
-    for (const arrays::ArrayGroup& ag : c_->array_groups()) ag.kernel(ag, up, vp, t, op);
+    for (; g != groups.end(); ++g) g->kernel(*g, up, vp, t, op, committed, trial);
   }
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
     double *k = K.data(), *c = C.data();
     const Index ld = K.outerStride();
     if (ld == K.rows() && C.outerStride() == ld) {  // contiguous: one fill each
@@ -77,61 +99,84 @@ class EffectSet {
       K.setZero();
       C.setZero();
     }
-    for (const compiled::Group& g : c_->groups())
-      dispatch(g.law, [&](auto L) { compiled::add_tangents<decltype(L)>(a, g, u.data(), v.data(), t, k, c, ld); });
-    for (const arrays::ArrayGroup& ag : c_->array_groups())
-      dispatch(ag.law, [&](auto L) { arrays::add_tangents<decltype(L)>(ag, u.data(), v.data(), t, k, c, ld); });
+    for (const kernels::Group& g : c_->groups())
+      dispatch(g.law, [&](auto L) { kernels::add_tangents<decltype(L)>(g, u.data(), v.data(), t, k, c, ld, committed_.data()); });
   }
   // The tangent entry by entry (sparse models): entries once, values at each state, in the same order.
   void tangent_entries(std::vector<Entry>& K, std::vector<Entry>& C) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    for (const compiled::Group& g : c_->groups())
-      dispatch(g.law, [&](auto L) { compiled::tangent_entries<decltype(L)>(a, g, K, C); });
-    for (const arrays::ArrayGroup& ag : c_->array_groups())
-      dispatch(ag.law, [&](auto L) { arrays::tangent_entries<decltype(L)>(ag, K, C); });
+    for (const kernels::Group& g : c_->groups())
+      dispatch(g.law, [&](auto L) { kernels::tangent_entries<decltype(L)>(g, K, C); });
   }
   void tangent_values(const CVecRef& u, const CVecRef& v, double t, double* K, double* C) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    for (const compiled::Group& g : c_->groups())
-      dispatch(g.law, [&](auto L) { compiled::tangent_values<decltype(L)>(a, g, u.data(), v.data(), t, K, C); });
-    for (const arrays::ArrayGroup& ag : c_->array_groups())
-      dispatch(ag.law, [&](auto L) { arrays::tangent_values<decltype(L)>(ag, u.data(), v.data(), t, K, C); });
-  }
-  // out_i = |constant loads|_i + sum over terms of |g_i f|: the round-off scale of the force.
-  void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    out = a.f_const.cwiseAbs();
-    for (const compiled::Group& g : c_->groups())
+    for (const kernels::Group& g : c_->groups())
       dispatch(g.law, [&](auto L) {
-        for (const compiled::Term* c = g.begin; c != g.end; ++c) {
-          const double f = std::abs(decltype(L)::value(c->p, a.measure(g.storage, *c, u), a.measure(g.storage, *c, v), t));
-          a.for_each_entry(g.storage, *c, [&](Index i, double gi) { out[i] += std::abs(gi) * f; });
-        }
+        kernels::tangent_values<decltype(L)>(g, u.data(), v.data(), t, K, C, committed_.data());
       });
-    for (const arrays::ArrayGroup& ag : c_->array_groups())
-      dispatch(ag.law, [&](auto L) {
-        for (size_t k = 0; k < ag.size; ++k) {
-          const double f = std::abs(decltype(L)::value(ag.params(k), ag.measure(k, u), ag.measure(k, v), t));
-          out[ag.i[k]] += f;
-          if (ag.j[k] >= 0) out[ag.j[k]] += f;
-        }
-      });
+  }
+  // out_i = |constant loads|_i + sum over effects of |g_i f|: the round-off scale of the force.
+  void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) const {
+    out = c_->constant_load().cwiseAbs();
+    for (const kernels::Group& g : c_->groups())
+      dispatch(g.law, [&](auto L) { kernels::add_magnitude<decltype(L)>(g, u.data(), v.data(), t, out.data(), committed_.data()); });
   }
   // Flags of the evaluated part (K and C carry the rest).
   bool uses_velocity() const { return c_->uses_velocity(); }
   bool uses_time() const { return c_->uses_time(); }
   bool is_linear() const { return c_->is_linear(); }
 
-  // Energy accounting over the effects evaluated each step and the constant
-  // loads; the model adds what K and C carry.
+  // ---- laws with memory ----
+  bool has_state() const { return c_->has_state(); }
+  Index state_size() const { return static_cast<Index>(committed_.size()); }
+  const std::vector<double>& state() const { return committed_; }
+  void get_state(double* out) const { std::copy(committed_.begin(), committed_.end(), out); }
+  // Sets the committed states (as state() gives them).
+  void set_state(const double* x) { std::copy(x, x + committed_.size(), committed_.begin()); }
+  // The laws' initial states (a new run).
+  void reset_state() {
+    const std::vector<double>& s0 = c_->initial_state();
+    std::copy(s0.begin(), s0.end(), committed_.begin());
+  }
+  // The trial of the last force evaluation becomes the committed state (its (u, v, t) is the
+  // accepted state: the caller knows). With verify_commits() it is checked against a new trial there.
+  void commit_last_trial(const double* u, const double* v, double t) {
+    if (verify_) verify(u, v, t);
+    committed_.swap(trial_);
+  }
+  // A new trial at the accepted state (u, v, t) becomes the committed state.
+  void commit_at(const double* u, const double* v, double t) {
+    for (const kernels::Group& g : c_->groups())
+      dispatch(g.law, [&](auto L) { kernels::commit_at<decltype(L)>(g, u, v, t, committed_.data()); });
+  }
+  // For tests: every commit_last_trial also evaluates the trial at its state and throws
+  // std::logic_error unless the two agree bit for bit.
+  void verify_commits(bool on) { verify_ = on; }
+
+  // Energy accounting over the effects evaluated each step and the constant loads; the model adds
+  // what K and C carry. With memory: the stored (recoverable) energy at the committed state.
   double potential(const CVecRef& u, double t) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    const double e = sum_terms(0.0, [&](auto L, compiled::Storage s, const compiled::Term& c) {
-      return decltype(L)::potential(c.p, a.measure(s, c, u), t);
-    });
-    return sum_arrays(e, u.data(), nullptr, [&](auto L, const LawParams& p, double d, double) {
-      return decltype(L)::potential(p, d, t);
-    });
+    double e = 0.0;
+    for (const kernels::Group& g : c_->groups())
+      e += dispatch(g.law, [&](auto L) {
+        using Lw = decltype(L);
+        return kernels::sum<Lw>(g, u.data(), nullptr, committed_.data(),
+                                [&](const auto& p, const auto& s, double d, double) { return law::stored<Lw>(p, s, d, t); });
+      });
+    return e;
+  }
+  // The energy the laws with memory have dissipated (their committed states say).
+  double hysteretic_dissipation() const {
+    double e = 0.0;
+    for (const kernels::Group& g : c_->groups())
+      e += dispatch(g.law, [&](auto L) {
+        using Lw = decltype(L);
+        if constexpr (law::has_state<Lw>) {
+          return kernels::sum<Lw>(g, nullptr, nullptr, committed_.data(),
+                                  [&](const auto& p, const auto& s, double, double) { return law::dissipated<Lw>(p, s); });
+        } else {
+          return 0.0;
+        }
+      });
+    return e;
   }
   // Whether the input power can jump in time (a signal whose rate jumps): only then does it matter which
   // side of a step point input_power() takes.
@@ -143,63 +188,47 @@ class EffectSet {
     return false;
   }
   double input_power(const CVecRef& u, const CVecRef& v, double t, int side = 0) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    const double w = sum_terms(-a.f_const.dot(v), [&](auto L, compiled::Storage s, const compiled::Term& c) {
-      return effects::input_power<decltype(L)>(c.p, a.measure(s, c, u), a.measure(s, c, v), t, side);
-    });
-    return sum_arrays(w, u.data(), v.data(), [&](auto L, const LawParams& p, double d, double dd) {
-      return effects::input_power<decltype(L)>(p, d, dd, t, side);
-    });
+    double w = -c_->constant_load().dot(v);
+    for (const kernels::Group& g : c_->groups())
+      w += dispatch(g.law, [&](auto L) {
+        using Lw = decltype(L);
+        return kernels::sum<Lw>(g, u.data(), v.data(), committed_.data(), [&](const auto& p, const auto&, double d, double dd) {
+          return law::input_power<Lw>(p, d, dd, t, side);
+        });
+      });
+    return w;
   }
   double dissipated_power(const CVecRef& v) const {
-    const compiled::Arrays& a = c_->arrays_of_terms();
-    const double w = sum_terms(0.0, [&](auto L, compiled::Storage s, const compiled::Term& c) {
-      using Lw = decltype(L);
-      if constexpr (is_dissipative<Lw>()) {
-        return effects::dissipated_power<Lw>(c.p, a.measure(s, c, v));
-      } else {
-        (void)c;
-        return 0.0;
-      }
-    });
-    return sum_arrays(w, nullptr, v.data(), [&](auto L, const LawParams& p, double, double dd) {
-      using Lw = decltype(L);
-      if constexpr (is_dissipative<Lw>()) {
-        return effects::dissipated_power<Lw>(p, dd);
-      } else {
-        (void)p;
-        (void)dd;
-        return 0.0;
-      }
-    });
+    double w = 0.0;
+    for (const kernels::Group& g : c_->groups())
+      w += dispatch(g.law, [&](auto L) {
+        using Lw = decltype(L);
+        if constexpr (law::is_viscous<Lw>()) {
+          return kernels::sum<Lw>(g, nullptr, v.data(), committed_.data(),
+                                  [&](const auto& p, const auto&, double, double dd) { return law::dissipated_power<Lw>(p, dd); });
+        } else {
+          return 0.0;
+        }
+      });
+    return w;
   }
 
  private:
-  // init + sum over groups of the sum over their terms of fn(L, storage, term)
-  template <class Fn>
-  double sum_terms(double init, Fn&& fn) const {
-    double e = init;
-    for (const compiled::Group& g : c_->groups())
-      e += dispatch(g.law, [&](auto L) {
-        double s = 0.0;
-        for (const compiled::Term* c = g.begin; c != g.end; ++c) s += fn(L, g.storage, *c);
-        return s;
-      });
-    return e;
-  }
-  // init + sum over the arrays' effects of fn(L, params, measure of u, measure of v) (u, v may be null).
-  template <class Fn>
-  double sum_arrays(double init, const double* u, const double* v, Fn&& fn) const {
-    double e = init;
-    for (const arrays::ArrayGroup& g : c_->array_groups())
-      e += dispatch(g.law, [&](auto L) {
-        return arrays::sum(g, u, v, [&](const LawParams& p, double d, double dd) { return fn(L, p, d, dd); });
-      });
-    return e;
+  void verify(const double* u, const double* v, double t) {
+    std::vector<double> fresh = committed_;
+    for (const kernels::Group& g : c_->groups())
+      dispatch(g.law, [&](auto L) { kernels::commit_at<decltype(L)>(g, u, v, t, fresh.data()); });
+    for (size_t k = 0; k < fresh.size(); ++k)
+      if (!(fresh[k] == trial_[k]) && !(std::isnan(fresh[k]) && std::isnan(trial_[k])))
+        throw std::logic_error("commit: the last trial's state differs from a trial at the accepted state at entry " +
+                               std::to_string(k) + " (" + detail::fmt(trial_[k]) + " != " + detail::fmt(fresh[k]) + ")");
   }
 
   std::shared_ptr<const CompiledEffects> c_ = std::make_shared<const CompiledEffects>();
-  double opaque_zero_ = 0.0;  // see operator()
+  std::vector<double> committed_;
+  mutable std::vector<double> trial_;  // written by every force evaluation (a pure trial)
+  bool verify_ = false;
+  double opaque_zero_ = 0.0;  // see eval()
 };
 
 }  // namespace effects

@@ -3,7 +3,8 @@
 
 #include "assembly.hpp"
 #include "effect.hpp"
-#include "effect_array.hpp"
 #include "effect_set.hpp"
-#include "laws.hpp"
+#include "kernels.hpp"
+#include "law.hpp"
+#include "laws/all.hpp"
 #include "signal.hpp"

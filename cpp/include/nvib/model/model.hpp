@@ -7,6 +7,10 @@
 //   tangent(u, v, t, K, C)   K = df/du, C = df/dv (overwrite both)
 //   has_tangent()            runtime switch (a Python model may or may not have one)
 //   uses_velocity(), uses_time(), is_linear()   flags the schemes exploit
+//   has_state(), state_size(), get_state(double*), set_state(const double*), reset_state(),
+//   commit_last_trial(u, v, t), commit_at(u, v, t)   a force with memory (laws with internal
+//                            variables): evaluations are pure trials, commits happen once per
+//                            accepted step (see commit() below)
 // Without a tangent the model differentiates f by central differences and
 // counts the extra evaluations in Stats::num_fd_force_evals.
 #pragma once
@@ -80,6 +84,25 @@ struct has_sparse_tangent_method<
 NVIB_OPTIONAL_FLAG(has_sparse_tangent, has_sparse_tangent_method<F>::value)
 #undef NVIB_OPTIONAL_FLAG
 
+// A force with memory: its internal variables, committed once per accepted step.
+template <class F, class = void>
+struct has_state_methods : std::false_type {};
+template <class F>
+struct has_state_methods<
+    F, std::void_t<decltype(std::declval<const F&>().has_state()), decltype(std::declval<const F&>().state_size()),
+                   decltype(std::declval<const F&>().get_state(std::declval<double*>())),
+                   decltype(std::declval<F&>().set_state(std::declval<const double*>())),
+                   decltype(std::declval<F&>().reset_state()),
+                   decltype(std::declval<F&>().commit_last_trial(std::declval<const double*>(),
+                                                                 std::declval<const double*>(), 0.0)),
+                   decltype(std::declval<F&>().commit_at(std::declval<const double*>(), std::declval<const double*>(),
+                                                         0.0))>> : std::true_type {};
+// hysteretic_dissipation(): the energy its laws with memory have dissipated.
+template <class F, class = void>
+struct has_hysteresis : std::false_type {};
+template <class F>
+struct has_hysteresis<F, std::void_t<decltype(std::declval<const F&>().hysteretic_dissipation())>> : std::true_type {};
+
 // eval(const double* u, const double* v, double t, double* out): the force on contiguous arrays.
 template <class F, class = void>
 struct has_pointer_eval : std::false_type {};
@@ -133,7 +156,7 @@ class Model {
     lin_ = std::move(lin);
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
-    is_linear_ = traits::is_linear(f_);
+    is_linear_ = traits::is_linear(f_) && !has_state();
   }
   // Dense K and C (small models, tests): stored sparse, exact zeros dropped.
   Model(Mass mass, const Matrix& K, const Matrix& C, Force force = Force{})
@@ -159,6 +182,44 @@ class Model {
   bool has_sparse_tangent() const {
     if constexpr (traits::has_sparse_tangent_method<Force>::value) return traits::has_sparse_tangent(f_);
     return false;
+  }
+
+  // ---- memory (laws with internal variables) ----
+  // A model with memory is never linear; without it the calls below do nothing (no storage, and for
+  // a force type without state methods no code at all).
+  bool has_state() const {
+    if constexpr (traits::has_state_methods<Force>::value) return f_.has_state();
+    return false;
+  }
+  Index state_size() const {
+    if constexpr (traits::has_state_methods<Force>::value) return f_.state_size();
+    return 0;
+  }
+  void get_state(double* out) const {
+    if constexpr (traits::has_state_methods<Force>::value) f_.get_state(out);
+    (void)out;
+  }
+  void set_state(const double* x) {
+    if constexpr (traits::has_state_methods<Force>::value) f_.set_state(x);
+    (void)x;
+  }
+  // The laws' initial states (a new run).
+  void reset_state() {
+    if constexpr (traits::has_state_methods<Force>::value) f_.reset_state();
+  }
+  // Once per accepted step, at its state (u, v, t): the trial there becomes the committed state.
+  // last_evaluation: the last force evaluation was at (u, v, t), so its trial is taken as it is;
+  // otherwise (a step whose equation holds elsewhere, such as generalized-alpha's alpha-point) a new
+  // trial is made there.
+  void commit(const Vector& u, const Vector& v, double t, bool last_evaluation) {
+    if constexpr (traits::has_state_methods<Force>::value) {
+      if (!f_.has_state()) return;
+      if (last_evaluation)
+        f_.commit_last_trial(u.data(), v.data(), t);
+      else
+        f_.commit_at(u.data(), v.data(), t);
+    }
+    (void)u, (void)v, (void)t, (void)last_evaluation;
   }
 
   // out = K u + C v + f(u, v, t): everything on the left of M a + ... = 0.
@@ -222,6 +283,11 @@ class Model {
     if constexpr (traits::has_sided_power<Force>::value) return f_.input_power(u, v, t, side);
     if constexpr (traits::has_energy<Force>::value) return f_.input_power(u, v, t);
     (void)side;
+    return 0.0;
+  }
+  // The energy dissipated by the laws with memory so far (their committed states).
+  double hysteretic_dissipation() const {
+    if constexpr (traits::has_hysteresis<Force>::value) return f_.hysteretic_dissipation();
     return 0.0;
   }
   double dissipated_power(const CVecRef& v) {

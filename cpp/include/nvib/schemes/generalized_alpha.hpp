@@ -162,7 +162,10 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     u_.swap(u1_);
     v_.swap(v1_);
     a_.swap(a1_);
-    return this->advance();
+    // Laws with memory: Newton's last evaluation was at the end of the step only for alpha_f = 0;
+    // otherwise it was at the alpha-point and the end state gets a trial of its own (as OpenSees'
+    // HHT::commit updates the domain at t_{n+1} before committing it).
+    return this->advance(p_.alpha_f == 0.0);
   }
 
   // Residual of the last accepted step relative to its force scale:

@@ -179,21 +179,15 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   // State: [u; v; a; r_n, r_{n-1}, ..] with the order + 1 remainders of the
   // interpolation history (newest first, n entries each). set_state() marks
   // the whole history as known.
-  Index state_size() const { return 3 * this->size() + R_.size(); }
-  Vector state() const {
-    Vector x(state_size());
-    this->pack_base(x);
-    x.tail(R_.size()) = Eigen::Map<const Vector>(R_.data(), R_.size());
-    return x;
-  }
+  Index state_size() const { return this->size_with(R_.size()); }
+  Vector state() const { return this->state_with(Eigen::Map<const Vector>(R_.data(), R_.size())); }
   void set_state(double t, const Vector& x) {
     NVIB_CHECK(ready_, "set_state", "initialize() must come first (it builds the exponential)");
-    this->check_state(t, x, state_size());
-    this->unpack_base(t, x);
+    Eigen::Map<Vector> history(R_.data(), R_.size());
+    this->set_state_with(t, x, history);
     const Index n = this->size();
     x_.head(n) = u_;
     x_.tail(n) = v_;
-    Eigen::Map<Vector>(R_.data(), R_.size()) = x.tail(R_.size());
     nhist_ = R_.cols();
   }
   const Matrix& transition() const { return T_; }

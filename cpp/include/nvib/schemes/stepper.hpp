@@ -1,5 +1,9 @@
 // State shared by every stepper: {t, u, v, a}, counters and the last failure.
-// A stepper owns its workspace; step() allocates nothing.
+// A stepper owns its workspace and its copy of the model; step() allocates nothing.
+//
+// Laws with memory: the model's internal variables are committed here, in advance(), the one
+// place every scheme passes once per accepted step, at the accepted state. A failed step never
+// reaches it, so it leaves every internal variable as it was.
 #pragma once
 
 #include <utility>
@@ -44,18 +48,21 @@ class StepperBase {
   const ModelT& model() const { return model_; }
 
   // The carried state as one vector: [u; v; a] (3n), followed by the history
-  // a scheme keeps (its stepper documents it). set_state(t, state()) leaves a
+  // a scheme keeps (its stepper documents it) and the committed internal
+  // variables of the model's laws with memory. set_state(t, state()) leaves a
   // run unchanged; nvib.stability builds the amplification matrix of a linear
   // model from these, column by column, with the stepper itself.
-  Index state_size() const { return 3 * size(); }
+  Index state_size() const { return 3 * size() + model_.state_size(); }
   Vector state() const {
     Vector x(state_size());
     pack_base(x);
+    model_.get_state(x.data() + 3 * size());
     return x;
   }
   void set_state(double t, const Vector& x) {
     check_state(t, x, state_size());
     unpack_base(t, x);
+    model_.set_state(x.data() + 3 * size());
   }
 
  protected:
@@ -71,17 +78,21 @@ class StepperBase {
                                               std::to_string(x.size()));
     NVIB_CHECK(x.allFinite(), "state", "the state has non-finite entries");
   }
-  // [u; v; a; h] for a stepper that carries one more vector h (such as a_{n-1}).
-  Vector state_with(const Vector& h) const {
-    Vector x(3 * size() + h.size());
+  // [u; v; a; h; internal variables] for a stepper that carries one more vector h (such as a_{n-1}).
+  Index size_with(Index h) const { return 3 * size() + h + model_.state_size(); }
+  Vector state_with(const Eigen::Ref<const Vector>& h) const {
+    Vector x(size_with(h.size()));
     pack_base(x);
-    x.tail(h.size()) = h;
+    x.segment(3 * size(), h.size()) = h;
+    model_.get_state(x.data() + 3 * size() + h.size());
     return x;
   }
-  void set_state_with(double t, const Vector& x, Vector& h) {
-    check_state(t, x, 3 * size() + h.size());
+  template <class H>
+  void set_state_with(double t, const Vector& x, H&& h) {
+    check_state(t, x, size_with(h.size()));
     unpack_base(t, x);
-    h = x.tail(h.size());
+    h = x.segment(3 * size(), h.size());
+    model_.set_state(x.data() + 3 * size() + h.size());
   }
   // Sets t, u, v, a; the step counter restarts at t.
   void unpack_base(double t, const Vector& x) {
@@ -103,7 +114,8 @@ class StepperBase {
     NVIB_CHECK(v0.allFinite(), "v0", "the initial velocity has non-finite entries");
   }
 
-  // Sets {t0, u0, v0} and a0 from the equation of motion (one force evaluation).
+  // Sets {t0, u0, v0} and a0 from the equation of motion (one force evaluation); the laws with
+  // memory start from their initial states, committed at (u0, v0).
   void start(double t0, const Vector& u0, const Vector& v0) {
     check_initial(t0, u0, v0);
     t0_ = t0;
@@ -111,7 +123,9 @@ class StepperBase {
     u_ = u0;
     v_ = v0;
     failure_ = Failure{};
+    model_.reset_state();
     model_.acceleration(u_, v_, t0_, a_, stats_);
+    model_.commit(u_, v_, t0_, true);
     // Every scheme would carry inf or NaN from the first step on: refuse the start.
     for (Index i = 0; i < a_.size(); ++i)
       NVIB_CHECK(std::isfinite(a_[i]), "u0, v0", "the initial acceleration is not finite (a[" + std::to_string(i) +
@@ -121,10 +135,13 @@ class StepperBase {
   // Time the step under way is heading for (computed, never accumulated).
   double next_time() const { return t0_ + static_cast<double>(n_ + 1) * h_; }
 
-  // Bookkeeping at the end of a successful step.
-  Status advance() {
+  // Bookkeeping at the end of a successful step, and the one commit of the laws with memory at the
+  // accepted state {u, v} at the step's end. last_evaluation: the scheme's last force evaluation was
+  // at that state (its trial is committed as it is); otherwise a new trial is made there.
+  Status advance(bool last_evaluation = true) {
     ++n_;
     ++stats_.num_steps;
+    model_.commit(u_, v_, time(), last_evaluation);
     return Status::success;
   }
 

@@ -79,8 +79,8 @@ class ZhaiStepper : public StepperBase<ModelT> {
     });
   }
 
-  // State: [u; v; a; a_{n-1}].
-  Index state_size() const { return 4 * this->size(); }
+  // State: [u; v; a; a_{n-1}; internal variables of the laws with memory].
+  Index state_size() const { return this->size_with(this->size()); }
   Vector state() const { return this->state_with(aprev_); }
   void set_state(double t, const Vector& x) { this->set_state_with(t, x, aprev_); }
 

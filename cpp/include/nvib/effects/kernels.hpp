@@ -1,0 +1,355 @@
+// The evaluation kernels of the effects: one family for single effects and arrays alike. Effects
+// are compiled (compiled_effects.hpp) into groups of one law and one way of storing their
+// measures; one loop is instantiated per (law, storage, uniform parameters or not), so there is one
+// indirect call per group, never per effect, and no switch inside the loops.
+//
+// Storages (the order is the order of the groups of single effects):
+//   dense_first  dense loads evaluated first; the group's first effect writes the force vector
+//   ground       d = x[i]                     (a spring to the ground)
+//   pair         d = x[i] - x[j]              (the common spring or damper between two DOFs)
+//   two          d = c0 x[i] + c1 x[j]
+//   sparse       d = sum of coef x[idx] over the effect's entries
+//   dense        a row covering at least half the DOFs
+//   mixed        d = x[i] - x[j], j < 0 the ground (arrays)
+//
+// A law with memory reads each effect's committed state and writes its trial state (a pure trial:
+// the committed state never changes here); `trial` may be null where no trial is wanted.
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "../base/types.hpp"
+#include "effect.hpp"
+
+namespace nvib {
+namespace effects {
+namespace kernels {
+
+enum Storage { dense_first = 0, ground = 1, pair = 2, two = 3, sparse = 4, dense = 5, mixed = 6 };
+
+struct Group;
+// out += g^T f for every effect of the group (dense_first: writes the first).
+using ForceKernel = void (*)(const Group&, const double* u, const double* v, double t, double* out,
+                             const double* committed, double* trial);
+
+struct Group {
+  LawId law = 0;
+  Storage storage = sparse;
+  bool uniform = false;  // one set of parameters for every effect
+  bool writes = false;   // dense_first: the group's first effect writes the force vector
+  std::size_t size = 0;
+  const std::int32_t* i = nullptr;  // ground, pair, two, mixed
+  const std::int32_t* j = nullptr;  // pair, two, mixed
+  const double* c = nullptr;        // two: c[2k], c[2k + 1]
+  const std::int32_t* first = nullptr;  // sparse, dense: the entries of effect k are [first[k], first[k + 1])
+  const Index* idx = nullptr;
+  const double* coef = nullptr;
+  const double* rows = nullptr;  // dense: row k at rows + k n
+  Index n = 0;
+  const double* constant_load = nullptr;  // dense_first: written with the first load (nullptr: none)
+  const void* params = nullptr;           // L::Params[size], or [1] if uniform
+  std::size_t state = 0;                  // offset of the first effect's state in the state buffers
+  ForceKernel kernel = nullptr;
+
+  template <class L>
+  const typename L::Params& params_of(std::size_t k) const {
+    return static_cast<const typename L::Params*>(params)[uniform ? 0 : k];
+  }
+  template <class L>
+  typename L::State state_of(const double* buffer, std::size_t k) const {
+    typename L::State s{};
+    if constexpr (law::has_state<L>) std::memcpy(&s, buffer + state + k * law::state_width<L>(), sizeof s);
+    (void)buffer, (void)k;
+    return s;
+  }
+  template <class L>
+  void store_state(double* buffer, std::size_t k, const typename L::State& s) const {
+    if constexpr (law::has_state<L>) std::memcpy(buffer + state + k * law::state_width<L>(), &s, sizeof s);
+    (void)buffer, (void)k, (void)s;
+  }
+  // g . x for effect k, the storage known at compile time.
+  template <Storage S, class X>
+  double measure_of(std::size_t k, const X& x) const {
+    if constexpr (S == ground) return x[i[k]];
+    if constexpr (S == pair) return x[i[k]] - x[j[k]];
+    if constexpr (S == mixed) return j[k] >= 0 ? x[i[k]] - x[j[k]] : x[i[k]] - 0.0;
+    if constexpr (S == two) return c[2 * k] * x[i[k]] + c[2 * k + 1] * x[j[k]];
+    if constexpr (S == dense || S == dense_first) {
+      const double* w = rows + static_cast<Index>(k) * n;
+      double d = 0.0;
+      for (Index q = 0; q < n; ++q) d += w[q] * x[q];
+      return d;
+    }
+    double d = 0.0;
+    for (std::int32_t e = first[k]; e < first[k + 1]; ++e) d += coef[e] * x[idx[e]];
+    return d;
+  }
+  // ... the storage known at run time.
+  template <class X>
+  double measure(std::size_t k, const X& x) const {
+    switch (storage) {
+      case ground: return measure_of<ground>(k, x);
+      case pair: return measure_of<pair>(k, x);
+      case mixed: return measure_of<mixed>(k, x);
+      case two: return measure_of<two>(k, x);
+      case dense:
+      case dense_first: return measure_of<dense>(k, x);
+      case sparse: break;
+    }
+    return measure_of<sparse>(k, x);
+  }
+  // fn(dof, g_dof) for every entry of effect k's measure, in a fixed order.
+  template <class F>
+  void for_each_entry(std::size_t k, F&& fn) const {
+    switch (storage) {
+      case ground: fn(Index(i[k]), 1.0); return;
+      case pair:
+        fn(Index(i[k]), 1.0);
+        fn(Index(j[k]), -1.0);
+        return;
+      case mixed:
+        fn(Index(i[k]), 1.0);
+        if (j[k] >= 0) fn(Index(j[k]), -1.0);
+        return;
+      case two:
+        fn(Index(i[k]), c[2 * k]);
+        fn(Index(j[k]), c[2 * k + 1]);
+        return;
+      default:
+        for (std::int32_t e = first[k]; e < first[k + 1]; ++e) fn(idx[e], coef[e]);
+    }
+  }
+};
+
+// d and d' of effect k where the law reads them (0 where it does not).
+template <class L, Storage S>
+inline void measures_of(const Group& g, std::size_t k, const double* u, const double* v, double& d, double& dd) {
+  d = L::uses_displacement ? g.measure_of<S>(k, u) : 0.0;
+  dd = L::uses_velocity ? g.measure_of<S>(k, v) : 0.0;
+}
+
+// The force of effect k (parameters p) from its committed state; with memory its trial state goes
+// to `trial`.
+template <class L>
+inline double respond(const Group& g, std::size_t k, const typename L::Params& p, double d, double dd, double t,
+                      const double* committed, double* trial) {
+  if constexpr (law::has_state<L>) {
+    const auto r = L::trial(p, g.state_of<L>(committed, k), d, dd, t);
+    if (trial) g.store_state<L>(trial, k, r.state);
+    return r.f;
+  } else {
+    (void)committed, (void)trial;
+    return L::value(p, d, dd, t);
+  }
+}
+
+// The dense loads (a ground acceleration's M r a_g(t)): the group's first effect writes the force
+// vector when the group `writes`, with the constant loads if there are any; the others add. A load
+// reads no state, so there is no measure to form and no per-effect test in the loops.
+template <class L>
+void add_dense_loads(const Group& g, double t, double* __restrict out) {
+  std::size_t k = 0;
+  const Index n = g.n;
+  if (g.writes && g.size > 0) {
+    const double f = L::value(g.params_of<L>(0), 0.0, 0.0, t);
+    const double* __restrict w = g.rows;
+    if (g.constant_load == nullptr) {  // one stream less: no constant vector to read
+      detail::for_each_index(n, [=](Index q) { out[q] = w[q] * f; });
+    } else {
+      const double* __restrict base = g.constant_load;
+      detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w[q] * f; });
+    }
+    k = 1;
+  }
+  for (; k < g.size; ++k) {
+    const double f = L::value(g.params_of<L>(k), 0.0, 0.0, t);
+    const double* __restrict w = g.rows + static_cast<Index>(k) * n;
+    for (Index q = 0; q < n; ++q) out[q] += w[q] * f;
+  }
+}
+
+template <class L, Storage S, bool Uniform>
+void add_forces(const Group& g, const double* u, const double* v, double t, double* out, const double* committed,
+                double* trial) {
+  if constexpr (S == dense_first && L::is_load) {  // only loads are stored dense_first (CompiledEffects)
+    add_dense_loads<L>(g, t, out);
+    (void)u, (void)v, (void)committed, (void)trial;
+    return;
+  } else {
+    for (std::size_t k = 0; k < g.size; ++k) {
+      double d, dd;
+      measures_of<L, S>(g, k, u, v, d, dd);
+      const auto& p = static_cast<const typename L::Params*>(g.params)[Uniform ? 0 : k];
+      const double f = respond<L>(g, k, p, d, dd, t, committed, trial);
+      if constexpr (S == ground) {
+        out[g.i[k]] += f;
+      } else if constexpr (S == pair) {
+        out[g.i[k]] += f;
+        out[g.j[k]] -= f;
+      } else if constexpr (S == mixed) {
+        out[g.i[k]] += f;
+        if (g.j[k] >= 0) out[g.j[k]] -= f;
+      } else if constexpr (S == two) {
+        if constexpr (std::is_same_v<L, HertzContact>)
+          if (f == 0.0) continue;  // an open contact adds nothing
+        out[g.i[k]] += g.c[2 * k] * f;
+        out[g.j[k]] += g.c[2 * k + 1] * f;
+      } else if constexpr (S == dense) {
+        const double* w = g.rows + static_cast<Index>(k) * g.n;
+        for (Index q = 0; q < g.n; ++q) out[q] += w[q] * f;
+      } else {
+        for (std::int32_t e = g.first[k]; e < g.first[k + 1]; ++e) out[g.idx[e]] += g.coef[e] * f;
+      }
+    }
+  }
+}
+
+template <class L>
+ForceKernel force_kernel(Storage s, bool uniform) {
+  switch (s) {
+    case dense_first:
+      if constexpr (L::is_load) return &add_forces<L, dense_first, false>;
+      break;  // (only loads are stored dense_first)
+    case ground: return uniform ? &add_forces<L, ground, true> : &add_forces<L, ground, false>;
+    case pair: return uniform ? &add_forces<L, pair, true> : &add_forces<L, pair, false>;
+    case mixed: return uniform ? &add_forces<L, mixed, true> : &add_forces<L, mixed, false>;
+    case two: return &add_forces<L, two, false>;
+    case dense: return &add_forces<L, dense, false>;
+    case sparse: break;
+  }
+  return &add_forces<L, sparse, false>;
+}
+
+// (d, d') of effect k, the storage known at run time.
+template <class L>
+inline void measures(const Group& g, std::size_t k, const double* u, const double* v, double& d, double& dd) {
+  d = L::uses_displacement ? g.measure(k, u) : 0.0;
+  dd = L::uses_velocity ? g.measure(k, v) : 0.0;
+}
+
+// Both slopes of effect k at (u, v, t) from its committed state.
+template <class L>
+inline Slopes slopes_at(const Group& g, std::size_t k, const double* u, const double* v, double t,
+                        const double* committed) {
+  double d, dd;
+  measures<L>(g, k, u, v, d, dd);
+  return law::slopes<L>(g.params_of<L>(k), g.state_of<L>(committed, k), d, dd, t);
+}
+
+// K += df/dd g g^T, C += df/dd' g g^T for every effect of the group (K, C column-major with
+// leading dimension ld; each where the law reads d or d'). One or two entries are written directly;
+// longer measures loop over their list, in its order.
+template <class L>
+void add_tangents(const Group& g, const double* u, const double* v, double t, double* K, double* C, Index ld,
+                  const double* committed) {
+  if constexpr (L::is_load) {
+    (void)g, (void)u, (void)v, (void)t, (void)K, (void)C, (void)ld, (void)committed;
+    return;
+  } else {
+    auto add = [&](double* A, std::size_t k, double s) {
+      switch (g.storage) {
+        case ground: A[g.i[k] + g.i[k] * ld] += s; return;
+        case pair:
+          if (s == 0.0) return;
+          A[g.i[k] + g.i[k] * ld] += s;
+          A[g.i[k] + g.j[k] * ld] -= s;
+          A[g.j[k] + g.i[k] * ld] -= s;
+          A[g.j[k] + g.j[k] * ld] += s;
+          return;
+        case mixed:
+          g.for_each_entry(k, [&](Index r, double gr) {
+            g.for_each_entry(k, [&](Index c, double gc) { A[r + c * ld] += s * (gr * gc); });
+          });
+          return;
+        default:
+          if (s == 0.0) return;
+          g.for_each_entry(k, [&](Index r, double gr) {
+            g.for_each_entry(k, [&](Index c, double gc) { A[r + c * ld] += s * gr * gc; });
+          });
+      }
+    };
+    for (std::size_t k = 0; k < g.size; ++k) {
+      const Slopes s = slopes_at<L>(g, k, u, v, t, committed);
+      if constexpr (L::uses_displacement) add(K, k, s.kd);
+      if constexpr (L::uses_velocity) add(C, k, s.kv);
+    }
+  }
+}
+
+// The entries (row, column) of the tangent of every effect of the group, in the order
+// tangent_values() writes them: g_i g_j for i, j over the measure, into K where the law reads d
+// and into C where it reads d'; nothing for a load.
+template <class L>
+void tangent_entries(const Group& g, std::vector<Entry>& K, std::vector<Entry>& C) {
+  if constexpr (!L::is_load) {
+    auto push = [&](std::vector<Entry>& out) {
+      for (std::size_t k = 0; k < g.size; ++k)
+        g.for_each_entry(k, [&](Index r, double) {
+          g.for_each_entry(k, [&](Index c, double) { out.push_back({static_cast<int>(r), static_cast<int>(c)}); });
+        });
+    };
+    if constexpr (L::uses_displacement) push(K);
+    if constexpr (L::uses_velocity) push(C);
+  }
+  (void)g, (void)K, (void)C;
+}
+
+// Their values: df/dd g_i g_j (and df/dd' g_i g_j), advancing K and C past the group's entries.
+template <class L>
+void tangent_values(const Group& g, const double* u, const double* v, double t, double*& K, double*& C,
+                    const double* committed) {
+  if constexpr (!L::is_load) {
+    for (std::size_t k = 0; k < g.size; ++k) {
+      const Slopes s = slopes_at<L>(g, k, u, v, t, committed);
+      auto write = [&](double*& out, double x) {
+        g.for_each_entry(k, [&](Index, double gi) { g.for_each_entry(k, [&](Index, double gj) { *out++ = x * gi * gj; }); });
+      };
+      if constexpr (L::uses_displacement) write(K, s.kd);
+      if constexpr (L::uses_velocity) write(C, s.kv);
+    }
+  }
+  (void)g, (void)u, (void)v, (void)t, (void)K, (void)C, (void)committed;
+}
+
+// out_i += |g_i f| for every effect: the round-off scale of the force.
+template <class L>
+void add_magnitude(const Group& g, const double* u, const double* v, double t, double* out, const double* committed) {
+  for (std::size_t k = 0; k < g.size; ++k) {
+    const double f = std::abs(law::force<L>(g.params_of<L>(k), g.state_of<L>(committed, k), g.measure(k, u),
+                                            g.measure(k, v), t));
+    if (g.storage == mixed) {
+      out[g.i[k]] += f;
+      if (g.j[k] >= 0) out[g.j[k]] += f;
+    } else {
+      g.for_each_entry(k, [&](Index q, double gq) { out[q] += std::abs(gq) * f; });
+    }
+  }
+}
+
+// The sum over the group's effects of fn(params, state, measure of u, measure of v) (u, v may be null).
+template <class L, class Fn>
+double sum(const Group& g, const double* u, const double* v, const double* committed, Fn&& fn) {
+  double s = 0.0;
+  for (std::size_t k = 0; k < g.size; ++k)
+    s += fn(g.params_of<L>(k), g.state_of<L>(committed, k), u ? g.measure(k, u) : 0.0, v ? g.measure(k, v) : 0.0);
+  return s;
+}
+
+// Commits each effect's state at (u, v, t): the trial from its committed state, in place.
+template <class L>
+void commit_at(const Group& g, const double* u, const double* v, double t, double* committed) {
+  if constexpr (law::has_state<L>) {
+    for (std::size_t k = 0; k < g.size; ++k) {
+      double d, dd;
+      measures<L>(g, k, u, v, d, dd);
+      g.store_state<L>(committed, k, L::trial(g.params_of<L>(k), g.state_of<L>(committed, k), d, dd, t).state);
+    }
+  }
+  (void)g, (void)u, (void)v, (void)t, (void)committed;
+}
+
+}  // namespace kernels
+}  // namespace effects
+}  // namespace nvib

@@ -1,0 +1,58 @@
+// Bilinear hysteresis with kinematic hardening: an elastic spring k in series with a slider of
+// strength fy, the slider's back force growing as H dp with its slip dp (b = 0: elastic-perfectly
+// plastic). The return mapping and its consistent tangent are those of one-dimensional rate-
+// independent plasticity with linear kinematic hardening (Simo & Hughes 1998, Computational
+// Inelasticity, Springer, sections 1.2-1.4, boxes 1.4 and 1.5); the post-yield stiffness is
+// b k, so H = b k / (1 - b). OpenSees' ElasticPP (b = 0) and Steel01 without isotropic hardening
+// (a1 = a3 = 0) are this law.
+#pragma once
+
+#include "../law.hpp"
+
+namespace nvib {
+namespace effects {
+
+struct Bilinear : LawBase {
+  static constexpr const char* key = "bilinear";
+  static constexpr const char* doc = "bilinear hysteresis, kinematic hardening: stiffness k, yield force fy, post-yield stiffness b k";
+  static constexpr const char* source = "Simo & Hughes 1998, Computational Inelasticity, sections 1.2-1.4";
+  static constexpr std::array<Parameter, 3> parameters{{{"k", kRequired, "elastic stiffness"},
+                                                        {"fy", kRequired, "yield force"},
+                                                        {"b", 0.0, "post-yield stiffness ratio, 0 <= b < 1"}}};
+  struct Params {
+    double k, fy, H;
+  };
+  struct State {
+    double dp;          // slip of the slider (plastic deformation)
+    double dissipated;  // energy dissipated: fy times the accumulated |slip|
+  };
+  static constexpr std::array<const char*, 2> state_names{{"plastic_deformation", "dissipated"}};
+
+  static void validate(const double* x) {
+    NVIB_CHECK(x[0] > 0.0, "k", "must be > 0, got " + detail::fmt(x[0]));
+    NVIB_CHECK(x[1] > 0.0, "fy", "must be > 0, got " + detail::fmt(x[1]));
+    NVIB_CHECK(x[2] >= 0.0 && x[2] < 1.0, "b", "needs 0 <= b < 1 (b = 1 is a linear spring), got " + detail::fmt(x[2]));
+  }
+  static Params prepare(const double* x, const Signal*) { return {x[0], x[1], x[2] * x[0] / (1.0 - x[2])}; }
+
+  // Elastic trial, then the closest-point return to |f - H dp| <= fy (exact for one increment).
+  static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
+    const double f_trial = p.k * (d - c.dp);
+    const double xi = f_trial - p.H * c.dp;          // the force on the slider
+    const double excess = std::abs(xi) - p.fy;
+    if (excess <= 0.0) return {f_trial, p.k, 0.0, c};
+    const double slip = excess / (p.k + p.H);        // |increment of dp|
+    const double s = xi > 0.0 ? 1.0 : -1.0;
+    return {f_trial - p.k * slip * s, p.k * p.H / (p.k + p.H), 0.0, {c.dp + s * slip, c.dissipated + p.fy * slip}};
+  }
+  // The spring's energy and the back spring's (given back by a reversed slip).
+  static double recoverable(const Params& p, const State& s, double d) {
+    const double e = d - s.dp;
+    return 0.5 * p.k * e * e + 0.5 * p.H * s.dp * s.dp;
+  }
+  static double dissipated(const Params&, const State& s) { return s.dissipated; }
+  static bool is_linear(const Params&) { return false; }
+};
+
+}  // namespace effects
+}  // namespace nvib
