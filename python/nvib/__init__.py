@@ -24,7 +24,7 @@ from ._io import save_result
 from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, DivergenceError, NvibError,
                       SingularMatrixError)
 from ._labels import scheme_label
-from ._model import EFFECT_PARAMETERS, Model
+from ._model import EFFECT_PARAMETERS, LawResponse, Model, drive
 from ._records import STANDARD_GRAVITY, GroundMotion, RecordError
 from ._batch import Batch, RunError, RunSummary, solve_many
 from ._damping import rayleigh, rayleigh_coefficients
@@ -47,7 +47,7 @@ __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError", "ENERGY_WARNING",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
     "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "IDA", "ida", "rayleigh", "rayleigh_coefficients", "load_result",
-    "EFFECT_PARAMETERS", "Energy", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
+    "EFFECT_PARAMETERS", "Energy", "LawResponse", "drive", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
     "plot_work_precision", "reference", "save_result", "scene_names", "scenes", "scheme_label", "schemes", "solve",

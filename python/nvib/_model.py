@@ -509,3 +509,35 @@ class Model:
         max_iter = _checks.integer("max_iter", max_iter, minimum=1)
         u = np.zeros(self.n) if u_guess is None else _checks.vector("u_guess", u_guess, self.n)
         return self._core.static_equilibrium(t, u, rtol, max_iter)
+
+
+class LawResponse:
+    """A law driven along a path (``drive``): ``force``, ``slope_d`` (df/dd, the consistent tangent of
+    a law with memory) and ``slope_v`` (df/dd') at each point, and ``state``, its internal variables
+    after each point by name (empty for a law without memory)."""
+
+    def __init__(self, force, slope_d, slope_v, state):
+        self.force, self.slope_d, self.slope_v, self.state = force, slope_d, slope_v, state
+
+    def __repr__(self) -> str:
+        return f"LawResponse({len(self.force)} points; state: {', '.join(self.state) or 'none'})"
+
+
+def drive(effect: dict, d, *, rate=None, t=None) -> LawResponse:
+    """Drive one law along a path of deformations ``d`` (with rates ``rate`` and times ``t``, zero by
+    default), each point a trial from the committed state and then a commit, as OpenSees'
+    testUniaxialMaterial does: the law alone, without a model or a scheme. ``effect`` is an effect's
+    dict without its measure, e.g. ``{"type": "bilinear", "k": 1e3, "fy": 10.0, "b": 0.05}``.
+    """
+    if not isinstance(effect, dict):
+        raise _checks.type_error("effect", f"expected a dict such as {{'type': 'bilinear', 'k': 1e3, 'fy': 10}}, "
+                                           f"got {type(effect).__name__}")
+    d = np.ascontiguousarray(_checks.real_array("d", d), dtype=float).reshape(-1)
+    n = d.size
+    rate = np.zeros(n) if rate is None else _checks.vector("rate", rate, n)
+    t = np.zeros(n) if t is None else _checks.vector("t", t, n)
+    if "measure" in effect:
+        raise _checks.value_error("effect.measure", "drive takes the law alone: d is its measure")
+    model = Model([1.0], effects=[dict(effect, measure={0: 1.0})])
+    f, kd, kv, state = _core.drive(model.effects[0], d.tolist(), np.asarray(rate).tolist(), np.asarray(t).tolist())
+    return LawResponse(f, kd, kv, state)

@@ -19,7 +19,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 SCENE_DIR = os.path.join(os.path.dirname(__file__), "scenes")
-_SCENE_KEYS = {"name", "title", "source", "t_end", "dt", "plot_dof"}
+_SCENE_KEYS = {"name", "title", "source", "t_end", "dt", "plot_dof", "record", "collapse_deformation"}
 _TOP_KEYS = {"scene", "dofs", "initial", "effect", "damping"}
 MAX_SCENE_BYTES = 64 * 2**20  # a scene file larger than this is refused before it is read
 
@@ -163,6 +163,20 @@ def _with_damping(path: str, model: Model, damping) -> Model:
         raise SceneError(f"{path}: [damping] rayleigh.{exc}", key="damping") from None
 
 
+def _scene_record(path: str, model: Model, record) -> list[str]:
+    """[scene] record = ["storey1", ...]: effects a run of the scene records, each a name of its effects."""
+    if isinstance(record, str):
+        record = [record]
+    if not isinstance(record, list) or not all(isinstance(r, str) for r in record):
+        raise SceneError(f"{path}: [scene] record: expected a list of effect names")
+    named = {e.name for e in model.effects or []} | {a.name for a in model.effect_arrays}
+    for r in record:
+        if r not in named and not any(w == r for w in model.without):
+            raise SceneError(f"{path}: [scene] record: no effect named {r!r} (named: "
+                             f"{', '.join(sorted(x for x in named if x)) or 'none'})")
+    return [r for r in record if r in named]
+
+
 def _require(path: str, table: dict, key: str, where: str):
     if key not in table:
         raise SceneError(f"{path}: [{where}] {key}: missing")
@@ -246,7 +260,7 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     if damping is not None:
         model = _with_damping(path, model, damping)
     settings = {}
-    for key in ("dt", "t_end"):
+    for key in ("dt", "t_end", "collapse_deformation"):
         if key in meta:
             try:
                 settings[key] = _checks.real(key, meta[key], positive=True)  # scenes start at t = 0
@@ -259,6 +273,8 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
         "dt": settings.get("dt"),
         "t_end": settings.get("t_end"),
         "plot_dof": meta.get("plot_dof", names[0]),
+        "record": _scene_record(path, model, meta.get("record", [])),
+        "collapse_deformation": settings.get("collapse_deformation"),
         "path": path,
         "initial_u": "static_equilibrium" if static else "given",
         "notes": [],

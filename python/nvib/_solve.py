@@ -71,6 +71,8 @@ def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
         if np.isfinite(rel) and rel > warn_energy_error:
             warnings.append(f"the energy balance error reached {rel:.1%} of the energy scale (above "
                             f"{warn_energy_error:.0%}): this history is inaccurate; try a smaller dt")
+    if res.status == Status.collapsed:
+        warnings.append(res.failure.message)
     ground = _ground_of(model, idx)
     res._extras = {"ground": ground, "relative_to_ground": ground is not None, "units": units, "warnings": warnings}
     return res
@@ -158,14 +160,33 @@ def _limit(name: str, value) -> float:
     return _checks.real(name, value, positive=True)
 
 
-def _run_options(model: Model, save_every, dofs, max_displacement, progress, energy, max_energy_error) -> dict:
+def _record(model: Model, record) -> list[str]:
+    """The names of the effects to record: a name, or a list of names of the model's effects."""
+    if record is None:
+        return []
+    names = [record] if isinstance(record, str) else record
+    if not hasattr(names, "__iter__"):
+        raise _checks.type_error("record", f"expected an effect's name or a list of names, got {type(record).__name__}")
+    names = list(names)
+    for k, name in enumerate(names):
+        if not isinstance(name, str):
+            raise _checks.type_error(f"record[{k}]", f"expected an effect's name, got {name!r}")
+    return names
+
+
+def _run_options(model: Model, save_every, dofs, max_displacement, progress, energy, max_energy_error,
+                 record=None, collapse_deformation=None, stop_at_collapse=True) -> dict:
     if progress is not None and not callable(progress):
         raise _checks.type_error("progress", "expected a callable progress(step, n_steps)")
     if not isinstance(energy, bool):
         raise _checks.type_error("energy", f"expected True or False, got {type(energy).__name__}")
     return dict(save_every=_checks.integer("save_every", save_every, minimum=1), dofs=_dof_indices(model, dofs),
                 max_displacement=_limit("max_displacement", max_displacement), energy=energy,
-                max_energy_error=_limit("max_energy_error", max_energy_error), progress=progress)
+                max_energy_error=_limit("max_energy_error", max_energy_error), progress=progress,
+                record=_record(model, record),
+                collapse_deformation=math.nan if collapse_deformation is None else
+                _checks.real("collapse_deformation", collapse_deformation, positive=True),
+                stop_at_collapse=_checks.boolean("stop_at_collapse", stop_at_collapse))
 
 
 class Stepper:
@@ -225,14 +246,16 @@ class Stepper:
 
     def integrate(self, t_end: float, *, save_every: int = 1, dofs=None, throw: bool = True,
                   max_displacement: float | None = None, progress=None, energy: bool = False,
-                  max_energy_error: float | None = None, warn_energy_error: float = ENERGY_WARNING) -> Result:
+                  max_energy_error: float | None = None, warn_energy_error: float = ENERGY_WARNING,
+                  record=None, collapse_deformation: float | None = None, stop_at_collapse: bool = True) -> Result:
         """Continue to t_end and return the saved history of this stretch (options as in ``solve``)."""
         t_end = _checks.real("t_end", t_end)
-        opts = _run_options(self.model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
+        opts = _run_options(self.model, save_every, dofs, max_displacement, progress, energy, max_energy_error,
+                            record, collapse_deformation, stop_at_collapse)
         warn = _warning_level(warn_energy_error)
         with _partial_annotated(self.model, warn):
             res = _annotate(self._st.integrate(t_end, **opts), self.model, warn)
-        if throw and not res.success:
+        if throw and not res.success and res.status != Status.collapsed:
             raise error_for(res.failure, res)
         return res
 
@@ -252,7 +275,8 @@ def default_max_displacement(u, v, duration: float) -> float:
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
           save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
           progress=None, energy: bool = False, max_energy_error: float | None = None,
-          warn_energy_error: float = ENERGY_WARNING) -> Result:
+          warn_energy_error: float = ENERGY_WARNING, record=None, collapse_deformation: float | None = None,
+          stop_at_collapse: bool = True) -> Result:
     """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. A
@@ -282,6 +306,14 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     scenes use SI (m, kg, s, N, rad); ``Model.units`` only labels plots and
     tables. Under a ground acceleration u, v and a are relative to the ground
     (``Result.relative_to_ground``; ``Result.absolute_a`` adds it back).
+
+    Effects with memory (bilinear, bouc_wen, friction, imk_peak_oriented, Python laws with a
+    ``state``) are committed once per accepted step. ``record=["storey1", ...]`` records the named
+    effects at every saved state: ``Result.effects["storey1"]`` has their measure, rate, force and
+    internal variables. A structure collapses when a law loses its strength for good (an IMK law's
+    energy or ultimate deformation used up) or, with ``collapse_deformation``, when an effect with
+    memory deforms beyond it: the run then stops with status ``collapsed`` (returned, never raised;
+    ``Result.warnings`` names the effect), unless ``stop_at_collapse=False``.
     """
     _check_model(model)
     dt = _checks.real("dt", dt, positive=True)
@@ -289,10 +321,11 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     t_end = _checks.real("t_end", t_end)
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
-    opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error)
+    opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error, record,
+                        collapse_deformation, stop_at_collapse)
     warn = _warning_level(warn_energy_error)
     with _partial_annotated(model, warn):
         res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
-    if throw and not res.success:
+    if throw and not res.success and res.status != Status.collapsed:
         raise error_for(res.failure, res)
     return res

@@ -16,7 +16,7 @@ from ._model import rate_unit
 
 __all__ = ["load_result"]
 
-_ENERGY = ("kinetic", "potential", "work_in", "dissipated", "balance_error")
+_ENERGY = ("kinetic", "potential", "work_in", "dissipated", "hysteretic", "balance_error")
 _COUNTERS = ("num_steps", "num_force_evals", "num_fd_force_evals", "num_tangent_evals", "num_newton_iters",
              "num_factorizations", "num_linear_solves", "num_expm")
 
@@ -92,7 +92,7 @@ def _netcdf_engine() -> str:
         return "scipy"  # netCDF 3, from SciPy
 
 
-def _rebuild(t, u, v, a, energy, dofs, attrs, units) -> Result:
+def _rebuild(t, u, v, a, energy, dofs, attrs, units, effects=None) -> Result:
     stats = Stats.__new__(Stats)
     stats.__setstate__(tuple(int(attrs.get(f"stats_{k}", 0)) for k in _COUNTERS) +
                        (float(attrs.get("stats_wall_time", 0.0)), str(attrs.get("stats_linear_solver", ""))))
@@ -104,7 +104,8 @@ def _rebuild(t, u, v, a, energy, dofs, attrs, units) -> Result:
     res.__setstate__((np.asarray(t, float), np.asarray(u, float).reshape(-1, m), np.asarray(v, float).reshape(-1, m),
                       np.asarray(a, float).reshape(-1, m), energy, list(range(m)), stats, status, failure,
                       int(attrs.get("num_steps_requested", 0)), float(attrs.get("max_residual", math.nan)),
-                      str(attrs.get("scheme", "")), float(attrs.get("dt", 0.0)), [str(d) for d in dofs], None))
+                      str(attrs.get("scheme", "")), float(attrs.get("dt", 0.0)), [str(d) for d in dofs], None,
+                      effects or []))
     warnings = str(attrs.get("warnings", ""))
     res._extras = {"ground": None, "relative_to_ground": bool(int(attrs.get("relative_to_ground", 0))),
                    "units": [str(u) for u in units] if units is not None else "m",
@@ -120,8 +121,8 @@ def load_result(path) -> Result:
     if ext == ".npz":
         with np.load(path, allow_pickle=False) as z:
             keys = set(z.files)
-            energy = (np.column_stack([z[f"energy_{k}"] for k in _ENERGY]) if "energy_kinetic" in keys
-                      else np.zeros((0, 0)))
+            energy = (np.column_stack([z[f"energy_{k}"] if f"energy_{k}" in keys else np.zeros(len(z["t"]))
+                                       for k in _ENERGY]) if "energy_kinetic" in keys else np.zeros((0, 0)))
             attrs = {k: z[k].item() for k in keys if z[k].ndim == 0}
             attrs.update({f"stats_{k}": z[k].item() for k in (*_COUNTERS, "wall_time", "linear_solver") if k in keys})
             return _rebuild(z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs,
@@ -129,8 +130,8 @@ def load_result(path) -> Result:
     if ext == ".nc":
         xr = _need("xarray", "xarray", "load_result() of a .nc file")
         with xr.open_dataset(path, engine=_netcdf_engine()) as ds:
-            energy = (np.column_stack([ds[f"energy_{k}"].values for k in _ENERGY]) if "energy_kinetic" in ds
-                      else np.zeros((0, 0)))
+            energy = (np.column_stack([ds[f"energy_{k}"].values if f"energy_{k}" in ds else np.zeros(ds.sizes["time"])
+                                       for k in _ENERGY]) if "energy_kinetic" in ds else np.zeros((0, 0)))
             return _rebuild(ds["time"].values, ds["u"].values, ds["v"].values, ds["a"].values, energy,
                             list(ds["dof"].values), dict(ds.attrs),
                             list(ds["unit"].values) if "unit" in ds.coords else None)

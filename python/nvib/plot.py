@@ -257,14 +257,14 @@ def run_figure(result, model, dof, title: str | None = None, *, measure: str | N
     if energy is not None:
         ax = axes[1]
         terms = [("kinetic", energy.kinetic), ("potential", energy.potential), ("work in", energy.work_in),
-                 ("dissipated", energy.dissipated)]
+                 ("dissipated", energy.dissipated), ("hysteretic", energy.hysteretic)]
         for lab, e in terms:
             if np.any(e != 0):
                 ax.plot(ts, np.asarray(e)[sel], lw=1.0, label=lab)
         with np.errstate(all="ignore"):  # a run that blew up may carry inf energies
-            balance = energy.kinetic + energy.potential + energy.dissipated - energy.work_in
+            balance = energy.kinetic + energy.potential + energy.dissipated + energy.hysteretic - energy.work_in
             relerr = energy.relative_balance_error()
-        ax.plot(ts, balance[sel], "k--", lw=1.2, label="K + P + D - W")
+        ax.plot(ts, balance[sel], "k--", lw=1.2, label="K + P + D + H - W")
         if failed:
             _log_if_blown_up(ax, [e for _, e in terms] + [balance])
         ax.set_xlabel("t [s]")

@@ -7,6 +7,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cstring>
 #include <string>
 #include <tuple>
 #include <variant>
@@ -218,8 +219,53 @@ py::tuple sparse_tangent(ModelT& md, const Vector& u, const Vector& v, double t)
   return py::make_tuple(build(md.K(), ke, kv), build(md.C(), ce, cv));
 }
 
+// A law driven along a path of (d, d', t), each point a trial from the committed state and then a
+// commit (as OpenSees' testUniaxialMaterial drives a material): forces, both slopes and the internal
+// variables after each point.
+inline py::tuple drive(const fx::Effect& e, const std::vector<double>& d, const std::vector<double>& dd,
+                       const std::vector<double>& t) {
+  const size_t n = d.size();
+  if (dd.size() != n) raise_value_error("rate", "expected " + std::to_string(n) + " values (as many as d), got " + std::to_string(dd.size()));
+  if (t.size() != n) raise_value_error("t", "expected " + std::to_string(n) + " values (as many as d), got " + std::to_string(t.size()));
+  return fx::dispatch(e.law, [&](auto L) {
+    using Lw = decltype(L);
+    constexpr size_t W = fx::law::state_width<Lw>();
+    std::vector<double> f(n), kd(n), kv(n), state(n * W);
+    {
+      py::gil_scoped_release nogil;
+      const auto p = e.template params<Lw>();
+      auto s = fx::law::initial<Lw>(p);
+      for (size_t k = 0; k < n; ++k) {
+        if constexpr (fx::law::has_state<Lw>) {
+          const auto r = Lw::trial(p, s, d[k], dd[k], t[k]);
+          f[k] = r.f;
+          kd[k] = r.kd;
+          kv[k] = r.kv;
+          s = r.state;
+          std::memcpy(state.data() + k * W, &s, sizeof s);
+        } else {
+          f[k] = Lw::value(p, d[k], dd[k], t[k]);
+          const fx::Slopes sl = Lw::slopes(p, d[k], dd[k], t[k]);
+          kd[k] = sl.kd;
+          kv[k] = sl.kv;
+        }
+      }
+    }
+    py::dict st;
+    for (size_t w = 0; w < W; ++w) {
+      py::array_t<double> col(n);
+      for (size_t k = 0; k < n; ++k) col.mutable_data()[k] = state[k * W + w];
+      st[Lw::state_names[w]] = col;
+    }
+    return py::make_tuple(py::array_t<double>(n, f.data()), py::array_t<double>(n, kd.data()),
+                          py::array_t<double>(n, kv.data()), st);
+  });
+}
+
 inline void bind_models(py::module_& m) {
   using fx::Effect;
+  m.def("drive", &drive, py::arg("effect"), py::arg("d"), py::arg("rate"), py::arg("t"),
+        "a law along a path of (d, d', t), committed point by point: (force, df/dd, df/dd', state dict)");
   m.def("laws", &laws, "the built-in effect types: their parameters, signal and flags");
   py::class_<Effect>(m, "Effect", "One declared effect: a law on its measure d = g . u.")
       .def(py::init([](const std::string& type, std::vector<Index> index, std::vector<double> coef,

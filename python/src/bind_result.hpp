@@ -54,42 +54,87 @@ inline py::array view(const double* data, Index rows, Index cols, Index row_stri
 struct PyEnergy {
   py::object owner;  // the Result
   const nvib::History* table;
-  py::array column(int k) const { return view(table->data() + k, table->rows(), 1, 5, owner, true); }
+  py::array column(int k) const { return view(table->data() + k, table->rows(), 1, nvib::kEnergyColumns, owner, true); }
 };
+constexpr const char* kEnergyNames[] = {"kinetic", "potential", "work_in", "dissipated", "hysteretic", "balance_error"};
 
 inline double relative_balance_error(const nvib::History& e) {
+  using namespace nvib;
   double scale = 0.0, worst = 0.0;
   for (Index i = 0; i < e.rows(); ++i) {
-    const double parts = std::abs(e(i, 0)) + std::abs(e(i, 1)) + std::abs(e(i, 2)) + std::abs(e(i, 3));
-    if (!std::isfinite(parts) || !std::isfinite(e(i, 4))) return std::numeric_limits<double>::infinity();
+    const double parts = std::abs(e(i, kinetic)) + std::abs(e(i, potential)) + std::abs(e(i, work_in)) +
+                         std::abs(e(i, dissipated)) + std::abs(e(i, hysteretic));
+    if (!std::isfinite(parts) || !std::isfinite(e(i, balance_error))) return std::numeric_limits<double>::infinity();
     scale = std::max(scale, parts);
-    worst = std::max(worst, std::abs(e(i, 4)));
+    worst = std::max(worst, std::abs(e(i, balance_error)));
   }
   return scale > 0.0 ? worst / scale : 0.0;
 }
 
+// A recorded effect (solve(record=[...])): its histories as views of the Result's storage.
+struct PyEffectRecord {
+  py::object owner;  // the Result
+  const nvib::EffectRecord* r;
+  // (n_saved,) for a single effect, (n_saved, count) for several.
+  py::array column_or_table(const nvib::History& h) const {
+    return view(h.data(), h.rows(), h.cols(), h.cols(), owner, r->count == 1);
+  }
+};
+
 inline void bind_result(py::module_& m) {
   py::class_<PyEnergy>(m, "Energy",
-                       "Energy accounting at the saved states: kinetic, potential (conservative effects and K), "
-                       "work_in (work of loads and moving supports since t0), dissipated (by dampers since t0) and "
-                       "balance_error = kinetic + potential + dissipated - work_in - (kinetic + potential at t0).")
-      .def_property_readonly("kinetic", [](const PyEnergy& e) { return e.column(0); })
-      .def_property_readonly("potential", [](const PyEnergy& e) { return e.column(1); })
-      .def_property_readonly("work_in", [](const PyEnergy& e) { return e.column(2); })
-      .def_property_readonly("dissipated", [](const PyEnergy& e) { return e.column(3); })
-      .def_property_readonly("balance_error", [](const PyEnergy& e) { return e.column(4); })
+                       "Energy accounting at the saved states: kinetic, potential (conservative effects and K, and "
+                       "the energy the laws with memory store), work_in (work of loads and moving supports since t0), "
+                       "dissipated (by dampers since t0), hysteretic (dissipated by the laws with memory since t0) and "
+                       "balance_error = kinetic + potential + dissipated + hysteretic - work_in - (kinetic + potential "
+                       "at t0).")
+      .def_property_readonly("kinetic", [](const PyEnergy& e) { return e.column(nvib::kinetic); })
+      .def_property_readonly("potential", [](const PyEnergy& e) { return e.column(nvib::potential); })
+      .def_property_readonly("work_in", [](const PyEnergy& e) { return e.column(nvib::work_in); })
+      .def_property_readonly("dissipated", [](const PyEnergy& e) { return e.column(nvib::dissipated); })
+      .def_property_readonly("hysteretic", [](const PyEnergy& e) { return e.column(nvib::hysteretic); })
+      .def_property_readonly("balance_error", [](const PyEnergy& e) { return e.column(nvib::balance_error); })
       .def_property_readonly("total", [](const PyEnergy& e) {
         py::array_t<double> out(e.table->rows());
-        for (Index i = 0; i < e.table->rows(); ++i) out.mutable_data()[i] = (*e.table)(i, 0) + (*e.table)(i, 1);
+        for (Index i = 0; i < e.table->rows(); ++i)
+          out.mutable_data()[i] = (*e.table)(i, nvib::kinetic) + (*e.table)(i, nvib::potential);
         return out;
       })
       .def("relative_balance_error", [](const PyEnergy& e) { return relative_balance_error(*e.table); },
            "max |balance error| over the largest energy magnitude seen in the run (inf for a run that blew up)")
       .def("as_dict", [](const PyEnergy& e) {
         py::dict d;
-        const char* names[] = {"kinetic", "potential", "work_in", "dissipated", "balance_error"};
-        for (int k = 0; k < 5; ++k) d[names[k]] = e.column(k);
+        for (int k = 0; k < nvib::kEnergyColumns; ++k) d[kEnergyNames[k]] = e.column(k);
         return d;
+      });
+
+  py::class_<PyEffectRecord>(m, "EffectRecord",
+                             "A recorded effect at the saved states: measure d, rate d', force f (arrays of the saved "
+                             "states, or (states, count) for several effects of one name) and state, a dict of its "
+                             "internal variables (plastic deformation, z, dissipated energy, ...).")
+      .def_property_readonly("name", [](const PyEffectRecord& e) { return e.r->name; })
+      .def_property_readonly("type", [](const PyEffectRecord& e) { return e.r->type; })
+      .def_property_readonly("count", [](const PyEffectRecord& e) { return e.r->count; })
+      .def_property_readonly("measure", [](const PyEffectRecord& e) { return e.column_or_table(e.r->measure); })
+      .def_property_readonly("rate", [](const PyEffectRecord& e) { return e.column_or_table(e.r->rate); })
+      .def_property_readonly("force", [](const PyEffectRecord& e) { return e.column_or_table(e.r->force); })
+      .def_property_readonly("state_names", [](const PyEffectRecord& e) { return e.r->state_names; })
+      .def_property_readonly("state", [](const PyEffectRecord& e) {
+        py::dict d;
+        const Index W = static_cast<Index>(e.r->state_names.size()), stride = e.r->state.cols();
+        for (Index w = 0; w < W; ++w) {
+          const double* first = e.r->state.data() + w;
+          const auto dsize = static_cast<py::ssize_t>(sizeof(double));
+          d[py::str(e.r->state_names[static_cast<size_t>(w)])] =
+              e.r->count == 1 ? py::array_t<double>({e.r->state.rows()}, {stride * dsize}, first, e.owner)
+                              : py::array_t<double>({e.r->state.rows(), e.r->count}, {stride * dsize, W * dsize}, first,
+                                                    e.owner);
+        }
+        return d;
+      })
+      .def("__repr__", [](const PyEffectRecord& e) {
+        return "EffectRecord('" + e.r->name + "', " + e.r->type + (e.r->count == 1 ? "" : ", " + std::to_string(e.r->count) + " effects") +
+               ", " + std::to_string(e.r->measure.rows()) + " states)";
       });
 
   py::class_<PyResult>(m, "Result",
@@ -120,6 +165,14 @@ inline void bind_result(py::module_& m) {
                                if (r.energy.size() == 0) return py::none();
                                return py::cast(PyEnergy{self, &r.energy});
                              })
+      .def_property_readonly("effects",
+                             [](py::object self) {
+                               py::dict d;
+                               for (const nvib::EffectRecord& r : self.cast<PyResult&>().r.effects)
+                                 d[py::str(r.name)] = py::cast(PyEffectRecord{self, &r});
+                               return d;
+                             },
+                             "the recorded effects by name (solve(record=[...])): EffectRecord")
       .def_property_readonly("dofs", &PyResult::saved_names, "the names of the saved DOFs")
       .def_property_readonly("dof_indices", [](const PyResult& p) { return p.r.dofs; })
       .def_property_readonly("stats", [](const PyResult& p) { return p.r.stats; })
@@ -140,11 +193,14 @@ inline void bind_result(py::module_& m) {
       .def(py::pickle(
           [](const PyResult& p) {
             const nvib::Result& r = p.r;
+            py::list effects;
+            for (const nvib::EffectRecord& e : r.effects)
+              effects.append(py::make_tuple(e.name, e.type, e.state_names, e.count, e.measure, e.rate, e.force, e.state));
             return py::make_tuple(r.t, r.u, r.v, r.a, r.energy, r.dofs, r.stats, r.status, r.failure,
-                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.extras);
+                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.extras, effects);
           },
           [](const py::tuple& x) {
-            if (x.size() != 15) raise_value_error("state", "not a pickled Result");
+            if (x.size() != 16) raise_value_error("state", "not a pickled Result");
             auto p = std::make_unique<PyResult>();
             nvib::Result& r = p->r;
             r.t = x[0].cast<nvib::Vector>();
@@ -162,6 +218,19 @@ inline void bind_result(py::module_& m) {
             p->dt = x[12].cast<double>();
             p->names = x[13];
             p->extras = x[14];
+            for (auto item : x[15].cast<py::list>()) {
+              const py::tuple e = item.cast<py::tuple>();
+              nvib::EffectRecord rec;
+              rec.name = e[0].cast<std::string>();
+              rec.type = e[1].cast<std::string>();
+              rec.state_names = e[2].cast<std::vector<std::string>>();
+              rec.count = e[3].cast<Index>();
+              rec.measure = e[4].cast<nvib::History>();
+              rec.rate = e[5].cast<nvib::History>();
+              rec.force = e[6].cast<nvib::History>();
+              rec.state = e[7].cast<nvib::History>();
+              r.effects.push_back(std::move(rec));
+            }
             return p;
           }))
       .def("__repr__", [](const PyResult& p) {

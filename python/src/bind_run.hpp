@@ -151,8 +151,12 @@ void keeping_partial(std::unique_ptr<PyResult>& out, F&& f) {
 }
 
 inline SolveOptions solve_options(std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
-                                  bool energy, double max_energy_error) {
+                                  bool energy, double max_energy_error, std::vector<std::string> record,
+                                  double collapse_deformation, bool stop_at_collapse) {
   SolveOptions opt;
+  opt.record = std::move(record);
+  opt.collapse_deformation = collapse_deformation;
+  opt.stop_at_collapse = stop_at_collapse;
   opt.save_every = save_every;
   opt.dofs = std::move(dofs);
   opt.max_displacement = max_displacement;
@@ -176,8 +180,10 @@ inline void bind_run(py::module_& m) {
       "solve",
       [](PyModel& model, py::object scheme, double dt, double t_end, double t0, const Vector& u0, const Vector& v0,
          std::int64_t save_every, std::vector<Index> dofs, double max_displacement, bool energy,
-         double max_energy_error, py::object progress) {
-        SolveOptions opt = solve_options(save_every, std::move(dofs), max_displacement, energy, max_energy_error);
+         double max_energy_error, py::object progress, std::vector<std::string> record, double collapse_deformation,
+         bool stop_at_collapse) {
+        SolveOptions opt = solve_options(save_every, std::move(dofs), max_displacement, energy, max_energy_error,
+                                         std::move(record), collapse_deformation, stop_at_collapse);
         opt.t0 = t0;
         auto result = std::make_unique<PyResult>();
         result->scheme = scheme;
@@ -199,7 +205,8 @@ inline void bind_run(py::module_& m) {
       py::arg("model"), py::arg("scheme"), py::arg("dt"), py::arg("t_end"), py::arg("t0"), py::arg("u0"),
       py::arg("v0"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
       py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
-      py::arg("progress") = py::none(),
+      py::arg("progress") = py::none(), py::arg("record") = std::vector<std::string>{},
+      py::arg("collapse_deformation") = nan, py::arg("stop_at_collapse") = true,
       "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end; NaN limits mean the defaults.");
 
   py::class_<AnyStepper>(m, "Stepper", "Step-by-step integration; one thread at a time.")
@@ -242,7 +249,8 @@ inline void bind_run(py::module_& m) {
       .def(
           "integrate",
           [](AnyStepper& s, double t_end, std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
-             bool energy, double max_energy_error, py::object progress) {
+             bool energy, double max_energy_error, py::object progress, std::vector<std::string> record,
+             double collapse_deformation, bool stop_at_collapse) {
             Exclusive x(s);
             auto result = std::make_unique<PyResult>();
             result->scheme = s.scheme;
@@ -250,14 +258,16 @@ inline void bind_run(py::module_& m) {
             result->names = s.dofs;
             keeping_partial(result, [&] {
               return s.integrate(t_end, solve_options(save_every, std::move(dofs), max_displacement, energy,
-                                                      max_energy_error),
+                                                      max_energy_error, std::move(record), collapse_deformation,
+                                                      stop_at_collapse),
                                  std::move(progress));
             });
             return result;
           },
           py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
           py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
-          py::arg("progress") = py::none());
+          py::arg("progress") = py::none(), py::arg("record") = std::vector<std::string>{},
+          py::arg("collapse_deformation") = nan, py::arg("stop_at_collapse") = true);
 
   m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,
         "Matrix exponential by the 2^N algorithm of the precise integration method.");

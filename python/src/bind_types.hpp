@@ -104,13 +104,16 @@ inline void bind_types(py::module_& m) {
 
   py::native_enum<Status>(m, "Status", "enum.Enum",
                           "How a run ended: success, diverged (non-finite or unbounded state, or energy created), "
-                          "newton_failed (the equilibrium iteration did not converge), singular_matrix, or interrupted "
-                          "(Ctrl-C or an exception from a callback stopped it; the partial result travels with it).")
+                          "newton_failed (the equilibrium iteration did not converge), singular_matrix, interrupted "
+                          "(Ctrl-C or an exception from a callback stopped it; the partial result travels with it), or "
+                          "collapsed (a law with memory lost its strength, or an effect deformed beyond the collapse "
+                          "limit: a result of the model, returned, never raised).")
       .value("success", Status::success)
       .value("diverged", Status::diverged)
       .value("newton_failed", Status::newton_failed)
       .value("singular_matrix", Status::singular_matrix)
       .value("interrupted", Status::interrupted)
+      .value("collapsed", Status::collapsed)
       .finalize();
 
   py::class_<Stats>(m, "Stats", "Counters summed over a run (never reset per step).")

@@ -37,7 +37,9 @@ namespace detail {
 
 // interrupted: an exception (an interrupt, an error raised by the force or the observer) stopped the
 // run; it reaches the caller as itself, or as a PartialRun carrying the history (SolveOptions::keep_partial).
-enum class Status { success, diverged, newton_failed, singular_matrix, interrupted };
+// collapsed: the structure collapsed (a law lost its strength, or deformed beyond the collapse
+// limit): a result of the model, not a failure of the scheme, so it is returned, never thrown.
+enum class Status { success, diverged, newton_failed, singular_matrix, interrupted, collapsed };
 
 inline const char* to_string(Status s) {
   switch (s) {
@@ -46,6 +48,7 @@ inline const char* to_string(Status s) {
     case Status::newton_failed: return "newton_failed";
     case Status::singular_matrix: return "singular_matrix";
     case Status::interrupted: return "interrupted";
+    case Status::collapsed: return "collapsed";
   }
   return "unknown";
 }

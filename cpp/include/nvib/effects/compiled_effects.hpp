@@ -105,6 +105,20 @@ class CompiledEffects {
   // Where single effect i and array q are evaluated (group npos: assembled, a constant load, or nothing).
   const Place& place_of_effect(size_t i) const { return places_[i]; }
   std::size_t group_of_array(size_t q) const { return array_groups_[q]; }
+  // Who the members of group g are: single effects (their indices), or the effects of one array.
+  const std::vector<std::uint32_t>& members(size_t g) const { return members_[g]; }
+  std::size_t array_of_group(size_t g) const { return group_arrays_[g]; }
+  // "storey1" (its name), or "effects[3] (bilinear)"; of an array, "name[k]" or "arrays[q][k]".
+  std::string describe(size_t g, size_t k) const {
+    const std::size_t q = group_arrays_[g];
+    if (q != npos) {
+      const EffectArray& a = arrays_[q];
+      return (a.name.empty() ? "arrays[" + std::to_string(q) + "]" : a.name) + "[" + std::to_string(k) + "] (" + a.key() + ")";
+    }
+    const std::size_t i = members_[g][k];
+    const Effect& e = all_[i];
+    return e.name.empty() ? "effects[" + std::to_string(i) + "] (" + e.key() + ")" : e.name + " (" + e.key() + ")";
+  }
 
  private:
   // The storage of one group's measures and parameters (arrays keep their own index arrays).
@@ -196,11 +210,13 @@ class CompiledEffects {
         g.size = e - b;
         g.n = n;
         auto* P = new_params<Lw>(st, g.size);
+        std::vector<std::uint32_t> members;
         if (g.storage == sparse || g.storage == dense || g.storage == dense_first) st.first.push_back(0);
         for (std::size_t q = b; q < e; ++q) {
           if (((q - b) & 0xFFFF) == 0) poll_interrupt();  // large models: every 65536 effects
           const Effect& ef = all_[sources[q].effect];
           places_[sources[q].effect] = Place{groups_.size(), q - b};
+          members.push_back(static_cast<std::uint32_t>(sources[q].effect));
           new (P + (q - b)) typename Lw::Params(ef.template params<Lw>());
           switch (g.storage) {
             case ground: st.i.push_back(static_cast<std::int32_t>(ef.index[0])); break;
@@ -225,6 +241,8 @@ class CompiledEffects {
               }
           }
         }
+        members_.push_back(std::move(members));
+        group_arrays_.push_back(npos);
         finish_group<Lw>(g, st, state_size);
       });
       b = e;
@@ -254,6 +272,8 @@ class CompiledEffects {
         auto* P = new_params<Lw>(st, g.uniform ? 1 : g.size);
         for (size_t k = 0; k < (g.uniform ? 1 : g.size); ++k) new (P + k) typename Lw::Params(a.template params<Lw>(k, s));
         array_groups_[q] = groups_.size();
+        members_.emplace_back();
+        group_arrays_.push_back(q);
         finish_group<Lw>(g, st, state_size);
       });
     }
@@ -300,6 +320,8 @@ class CompiledEffects {
   std::vector<kernels::Group> groups_;
   std::vector<Place> places_;
   std::vector<std::size_t> array_groups_;
+  std::vector<std::vector<std::uint32_t>> members_;  // per group: its single effects (empty for an array's)
+  std::vector<std::size_t> group_arrays_;           // per group: its array, or npos
   std::vector<double> initial_state_;
 };
 

@@ -20,7 +20,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <memory>
+#include <string>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -151,6 +153,128 @@ class EffectSet {
   // std::logic_error unless the two agree bit for bit.
   void verify_commits(bool on) { verify_ = on; }
 
+  // ---- recording effects (solve/observers.hpp) ----
+  // The effects a name designates: every single effect of that name, or the array of that name. They
+  // must share a law (their internal variables are recorded side by side).
+  struct Selection {
+    std::string name;
+    LawId law = 0;
+    std::vector<std::size_t> singles;          // indices of single effects
+    std::size_t array = CompiledEffects::npos;  // or an array
+    std::size_t count = 0;
+    std::size_t width = 0;  // internal variables per effect
+  };
+  Selection select(const std::string& name) const {
+    Selection sel;
+    sel.name = name;
+    for (size_t i = 0; i < effects().size(); ++i)
+      if (effects()[i].name == name) sel.singles.push_back(i);
+    for (size_t q = 0; q < arrays().size(); ++q)
+      if (arrays()[q].name == name) {
+        NVIB_CHECK(sel.singles.empty() && sel.array == CompiledEffects::npos, "record",
+                   "the name '" + name + "' is given to an effect array and to other effects: name them apart to record them");
+        sel.array = q;
+      }
+    NVIB_CHECK(!sel.singles.empty() || sel.array != CompiledEffects::npos, "record",
+               "no effect named '" + name + "'" + known_names());
+    sel.law = sel.array != CompiledEffects::npos ? arrays()[sel.array].law : effects()[sel.singles[0]].law;
+    for (size_t i : sel.singles)
+      NVIB_CHECK(effects()[i].law == sel.law, "record",
+                 "the effects named '" + name + "' have different laws (" + key_of(sel.law) + ", " +
+                     effects()[i].key() + "): give them names of their own to record them");
+    sel.count = sel.array != CompiledEffects::npos ? arrays()[sel.array].size() : sel.singles.size();
+    sel.width = dispatch(sel.law, [](auto L) { return law::state_width<decltype(L)>(); });
+    return sel;
+  }
+  // Each selected effect at (u, v, t) with its committed state: measure d, rate d', force f and
+  // internal variables (width each), written to d[k], dd[k], f[k], state[k * width ..].
+  void sample(const Selection& sel, const double* u, const double* v, double t, double* d, double* dd, double* f,
+              double* state) const {
+    dispatch(sel.law, [&](auto L) {
+      using Lw = decltype(L);
+      constexpr std::size_t W = law::state_width<Lw>();
+      auto one = [&](std::size_t k, double dk, double ddk, const typename Lw::Params& p, const typename Lw::State& st) {
+        d[k] = dk;
+        dd[k] = ddk;
+        f[k] = law::force<Lw>(p, st, Lw::uses_displacement ? dk : 0.0, Lw::uses_velocity ? ddk : 0.0, t);
+        if constexpr (W > 0) std::memcpy(state + k * W, &st, sizeof st);
+      };
+      if (sel.array != CompiledEffects::npos) {
+        const EffectArray& a = arrays()[sel.array];
+        const std::size_t gi = c_->group_of_array(sel.array);
+        const Signal* sig = a.signal.present() ? &a.signal : nullptr;
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          const double dk = u[a.i[k]] - (a.j[k] >= 0 ? u[a.j[k]] : 0.0), ddk = v[a.i[k]] - (a.j[k] >= 0 ? v[a.j[k]] : 0.0);
+          if (gi == CompiledEffects::npos) {  // (constant loads: not evaluated)
+            const auto p = a.template params<Lw>(k, sig);
+            one(k, dk, ddk, p, law::initial<Lw>(p));
+          } else {
+            const kernels::Group& g = c_->groups()[gi];
+            one(k, dk, ddk, g.params_of<Lw>(k), g.state_of<Lw>(committed_.data(), k));
+          }
+        }
+        return;
+      }
+      for (std::size_t k = 0; k < sel.singles.size(); ++k) {
+        const Effect& e = effects()[sel.singles[k]];
+        const auto& place = c_->place_of_effect(sel.singles[k]);
+        const double dk = e.measure(u), ddk = e.measure(v);
+        if (place.group == CompiledEffects::npos) {  // assembled into K and C, or a constant load
+          const auto p = e.template params<Lw>();
+          one(k, dk, ddk, p, law::initial<Lw>(p));
+        } else {
+          const kernels::Group& g = c_->groups()[place.group];
+          one(k, dk, ddk, g.params_of<Lw>(place.k), g.state_of<Lw>(committed_.data(), place.k));
+        }
+      }
+    });
+  }
+
+  // ---- collapse ----
+  // Some law can fail (lose its strength for good).
+  bool can_fail() const {
+    for (const kernels::Group& g : c_->groups())
+      if (dispatch(g.law, [](auto L) { return law::can_fail<decltype(L)>::value; })) return true;
+    return false;
+  }
+  // The first effect whose law has failed, by its committed state: true and its description in `who`.
+  bool failed(std::string& who) const {
+    const auto& groups = c_->groups();
+    for (std::size_t gi = 0; gi < groups.size(); ++gi) {
+      const kernels::Group& g = groups[gi];
+      const std::size_t k = dispatch(g.law, [&](auto L) -> std::size_t {
+        using Lw = decltype(L);
+        if constexpr (law::can_fail<Lw>::value) {
+          for (std::size_t q = 0; q < g.size; ++q)
+            if (Lw::failed(g.params_of<Lw>(q), g.state_of<Lw>(committed_.data(), q))) return q;
+        }
+        return CompiledEffects::npos;
+      });
+      if (k != CompiledEffects::npos) {
+        who = c_->describe(gi, k);
+        return true;
+      }
+    }
+    return false;
+  }
+  // The first effect with memory whose |d| exceeds `limit` at u: true, its description and d.
+  bool beyond(const double* u, double limit, std::string& who, double& d) const {
+    const auto& groups = c_->groups();
+    for (std::size_t gi = 0; gi < groups.size(); ++gi) {
+      const kernels::Group& g = groups[gi];
+      if (!dispatch(g.law, [](auto L) { return law::has_state<decltype(L)>; })) continue;
+      for (std::size_t k = 0; k < g.size; ++k) {
+        const double x = g.measure(k, u);
+        if (!(std::abs(x) <= limit)) {
+          who = c_->describe(gi, k);
+          d = x;
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
   // Energy accounting over the effects evaluated each step and the constant loads; the model adds
   // what K and C carry. With memory: the stored (recoverable) energy at the committed state.
   double potential(const CVecRef& u, double t) const {
@@ -214,6 +338,14 @@ class EffectSet {
   }
 
  private:
+  std::string known_names() const {
+    std::string names;
+    for (const Effect& e : effects())
+      if (!e.name.empty() && names.find("'" + e.name + "'") == std::string::npos) names += (names.empty() ? "" : ", ") + ("'" + e.name + "'");
+    for (const EffectArray& a : arrays())
+      if (!a.name.empty()) names += (names.empty() ? "" : ", ") + ("'" + a.name + "'");
+    return names.empty() ? " (no effect has a name)" : " (named: " + names + ")";
+  }
   void verify(const double* u, const double* v, double t) {
     std::vector<double> fresh = committed_;
     for (const kernels::Group& g : c_->groups())
