@@ -15,8 +15,9 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
     """Writes ``result`` to ``path`` by its extension.
 
     .npz: t, u, v, a, dofs, status, scheme, dt, the stats counters, energy_* columns
-    (if recorded), the failure message (if any) and the ``extra`` entries.
-    .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...]``
+    (if recorded), the recorded effects (``effect_arrays``), the failure message (if any) and the
+    ``extra`` entries.
+    .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...][,effect:<name>:<field>,...]``
     and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999)."""
     ext = os.path.splitext(str(path))[1].lower()
     if ext == ".npz":
@@ -25,6 +26,42 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
         _write_csv(path, result)
     else:
         raise _checks.value_error("path", f"expected a file ending in {' or '.join(FORMATS)}, got {path!r}")
+
+
+def effect_columns(result):
+    """(column name, 1-D array) for every recorded effect: measure, rate, force and internal variables,
+    ``effect:<name>:<field>`` (``effect:<name>[k]:<field>`` for the k-th of several of one name)."""
+    for name, rec in result.effects.items():
+        fields = [("measure", rec.measure), ("rate", rec.rate), ("force", rec.force)] + list(rec.state.items())
+        for field, values in fields:
+            values = np.asarray(values)
+            if rec.count == 1:
+                yield f"effect:{name}:{field}", values
+            else:
+                for k in range(rec.count):
+                    yield f"effect:{name}[{k}]:{field}", values[:, k]
+
+
+def effect_arrays(result) -> dict:
+    """The recorded effects as named arrays, by position: effects_names, effect<q>_type, _state_names,
+    _measure, _rate, _force, _state (states x effects and internal variables; what load_result reads)."""
+    out = {}
+    names = list(result.effects)
+    if names:
+        out["effects_names"] = np.array(names, dtype=str)
+    for q, name in enumerate(names):
+        rec = result.effects[name]
+        out[f"effect{q}_type"] = np.array(rec.type)
+        out[f"effect{q}_state_names"] = np.array(rec.state_names, dtype=str)
+        for field in ("measure", "rate", "force"):
+            out[f"effect{q}_{field}"] = np.asarray(getattr(rec, field)).reshape(len(result.t), rec.count)
+        w = len(rec.state_names)
+        if w:  # (a law without memory has no internal variables to store)
+            state = np.zeros((len(result.t), rec.count * w))
+            for j, var in enumerate(rec.state_names):
+                state[:, j::w] = np.asarray(rec.state[var]).reshape(len(result.t), rec.count)
+            out[f"effect{q}_state"] = state
+    return out
 
 
 def _write_npz(path: str, result, extra: dict | None) -> None:
@@ -37,6 +74,7 @@ def _write_npz(path: str, result, extra: dict | None) -> None:
     if result.energy is not None:
         for k, val in result.energy.as_dict().items():
             data[f"energy_{k}"] = val
+    data.update(effect_arrays(result))
     if result.failure is not None:
         data["failure"] = np.array(result.failure.message)
     data["units"] = np.array(result.units, dtype=str)
@@ -56,6 +94,9 @@ def _write_csv(path: str, result) -> None:
         for k, val in result.energy.as_dict().items():
             cols.append(np.asarray(val)[:, None])
             head.append(f"energy:{k}")
+    for name, val in effect_columns(result):
+        cols.append(val[:, None])
+        head.append(name)
     table = np.hstack(cols) if len(result.t) else np.zeros((0, len(head)))
     with open(path, "w", encoding="utf-8", newline="") as fh:  # shortest decimals that read back exactly
         fh.write(",".join(head) + "\n")

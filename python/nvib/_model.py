@@ -291,20 +291,33 @@ class Model:
     def _python_law(self, i: int, spec: dict):
         """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},
         "law": f(d, d', t) -> float, "tangent": optional (d, d', t) -> (df/dd, df/dd'),
-        "uses_velocity": True, "uses_time": True, "name": ""}."""
+        "uses_velocity": True, "uses_time": True, "name": ""}; with memory, "state": its initial internal
+        variables (a list of floats), and then law(d, d', t, state) -> (f, trial state) and
+        tangent(d, d', t, state) -> (df/dd, df/dd'), ``state`` the committed one (a tuple)."""
         where = f"effects[{i}]"
-        allowed = {"type", "measure", "law", "tangent", "uses_velocity", "uses_time", "name", "note"}
+        allowed = {"type", "measure", "law", "tangent", "uses_velocity", "uses_time", "name", "note", "state"}
         for key in spec:
             if key not in allowed:
                 raise _checks.value_error(f"{where}.{key}", f"unknown key of a callable effect (expected "
                                  f"{', '.join(sorted(allowed - {'type'}))})")
         law = spec.get("law")
+        stateful = spec.get("state") is not None
+        signature = "law(d, dd, t, state) -> (force, state)" if stateful else "law(d, dd, t) -> float"
         if not callable(law):
-            raise _checks.type_error(f"{where}.law", f"expected a callable law(d, dd, t) -> float, got {type(law).__name__}")
+            raise _checks.type_error(f"{where}.law", f"expected a callable {signature}, got {type(law).__name__}")
         tangent = spec.get("tangent")
         if tangent is not None and not callable(tangent):
-            raise _checks.type_error(f"{where}.tangent", f"expected a callable tangent(d, dd, t) -> (df/dd, df/ddd), "
-                            f"got {type(tangent).__name__}")
+            raise _checks.type_error(f"{where}.tangent", f"expected a callable tangent(d, dd, t{', state' if stateful else ''}) "
+                            f"-> (df/dd, df/ddd), got {type(tangent).__name__}")
+        initial = []
+        if stateful:
+            state = spec["state"]
+            if isinstance(state, (str, bytes)) or not hasattr(state, "__iter__"):
+                raise _checks.type_error(f"{where}.state", f"expected the initial internal variables, a list of floats, "
+                                                            f"got {type(state).__name__}")
+            initial = [_checks.real(f"{where}.state[{k}]", x) for k, x in enumerate(state)]
+            if not initial:
+                raise _checks.value_error(f"{where}.state", "a law with memory needs at least one internal variable")
         measure = spec.get("measure")
         if not isinstance(measure, dict) or not measure:
             raise _checks.value_error(f"{where}.measure", "expected a non-empty mapping DOF -> coefficient")
@@ -317,7 +330,7 @@ class Model:
                 raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
             flags.append(value)
         _effect_name(where, spec)
-        return (index, coef, law, tangent, where, *flags)
+        return (index, coef, law, tangent, where, *flags, initial)
 
     def _effect_array(self, i: int, spec: dict) -> "_core.EffectArray":
         """Many effects of one law: {"type": ..., "i": [...], "j": [...] (optional; -1: the ground), each

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _checks
 from ._core import Failure, Result, Stats, Status
-from ._io import save_result
+from ._io import effect_arrays, effect_columns, save_result
 from ._model import rate_unit
 
 __all__ = ["load_result"]
@@ -42,7 +42,8 @@ def _attrs(res) -> dict:
 
 def to_pandas(self):
     """A DataFrame indexed by time ``t``, columns ``u:<dof>``, ``v:<dof>``, ``a:<dof>`` (and
-    ``energy:<term>`` if recorded); ``attrs`` holds the scheme, dt, status, failure and counters."""
+    ``energy:<term>`` and ``effect:<name>:<field>`` where recorded); ``attrs`` holds the scheme, dt,
+    status, failure and counters."""
     pd = _need("pandas", "pandas", "Result.to_pandas()")
     cols = {}
     for q, arr in (("u", self.u), ("v", self.v), ("a", self.a)):
@@ -51,6 +52,7 @@ def to_pandas(self):
     if self.energy is not None:
         for k, v in self.energy.as_dict().items():
             cols[f"energy:{k}"] = np.asarray(v)
+    cols.update(effect_columns(self))
     df = pd.DataFrame(cols, index=pd.Index(np.asarray(self.t), name="t"))
     df.attrs.update(_attrs(self))
     df.attrs["units"] = {"t": "s", **{f"{q}:{d}": rate_unit(u, p) for q, p in (("u", 0), ("v", 1), ("a", 2))
@@ -65,12 +67,18 @@ def to_xarray(self):
     if self.energy is not None:
         for k, v in self.energy.as_dict().items():
             data[f"energy_{k}"] = (("time",), np.asarray(v))
+    for key, arr in effect_arrays(self).items():  # by position; effects_names and the types as attributes
+        if key.endswith(("_measure", "_rate", "_force", "_state")):
+            data[key] = (("time", f"{key}_column"), arr)
     ds = xr.Dataset(data, coords={"time": np.asarray(self.t), "dof": [str(d) for d in self.dofs],
                                   "unit": ("dof", [str(u) for u in self.units])})
     ds["time"].attrs["units"] = "s"
     for q, p in (("u", 0), ("v", 1), ("a", 2)):  # per DOF in the unit coordinate; here the rate
         ds[q].attrs["units"] = rate_unit("unit", p)
     ds.attrs.update(_attrs(self))
+    for key, arr in effect_arrays(self).items():
+        if not key.endswith(("_measure", "_rate", "_force", "_state")):
+            ds.attrs[key] = "\n".join(np.atleast_1d(arr).astype(str).tolist())
     return ds
 
 
@@ -113,6 +121,21 @@ def _rebuild(t, u, v, a, energy, dofs, attrs, units, effects=None) -> Result:
     return res
 
 
+def _records(get, names) -> list:
+    """The recorded effects (as the pickled Result holds them) from named arrays (effect_arrays)."""
+    out = []
+    for q, name in enumerate(names):
+        measure = np.atleast_2d(np.asarray(get(f"effect{q}_measure"), float))
+        count = measure.shape[1]
+        state_names = [str(x) for x in np.atleast_1d(get(f"effect{q}_state_names")) if str(x)]
+        out.append((str(name), str(get(f"effect{q}_type")), state_names, count, measure,
+                    np.asarray(get(f"effect{q}_rate"), float).reshape(-1, count),
+                    np.asarray(get(f"effect{q}_force"), float).reshape(-1, count),
+                    np.asarray(get(f"effect{q}_state"), float).reshape(len(measure), -1) if state_names
+                    else np.zeros((len(measure), 0))))
+    return out
+
+
 def load_result(path) -> Result:
     """A Result read back from .npz or .nc (as ``Result.save`` writes them). Its ``scheme`` is the scheme's
     repr; histories, DOF names, energy, status, failure message and counters are as saved."""
@@ -125,16 +148,27 @@ def load_result(path) -> Result:
                                        for k in _ENERGY]) if "energy_kinetic" in keys else np.zeros((0, 0)))
             attrs = {k: z[k].item() for k in keys if z[k].ndim == 0}
             attrs.update({f"stats_{k}": z[k].item() for k in (*_COUNTERS, "wall_time", "linear_solver") if k in keys})
+            names = list(z["effects_names"]) if "effects_names" in keys else []
+            effects = _records(lambda k: z[k], names)
             return _rebuild(z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs,
-                            list(z["units"]) if "units" in keys else None)
+                            list(z["units"]) if "units" in keys else None, effects)
     if ext == ".nc":
         xr = _need("xarray", "xarray", "load_result() of a .nc file")
         with xr.open_dataset(path, engine=_netcdf_engine()) as ds:
             energy = (np.column_stack([ds[f"energy_{k}"].values if f"energy_{k}" in ds else np.zeros(ds.sizes["time"])
                                        for k in _ENERGY]) if "energy_kinetic" in ds else np.zeros((0, 0)))
+            attrs = dict(ds.attrs)
+            names = attrs["effects_names"].split("\n") if attrs.get("effects_names") else []
+
+            def get(key):
+                if key in ds:
+                    return ds[key].values
+                return np.array(attrs[key].split("\n") if key.endswith("_state_names") else attrs[key])
+
+            effects = _records(get, names)
             return _rebuild(ds["time"].values, ds["u"].values, ds["v"].values, ds["a"].values, energy,
-                            list(ds["dof"].values), dict(ds.attrs),
-                            list(ds["unit"].values) if "unit" in ds.coords else None)
+                            list(ds["dof"].values), attrs, list(ds["unit"].values) if "unit" in ds.coords else None,
+                            effects)
     raise _checks.value_error("path", f"expected a file ending in .npz or .nc, got {path!r}")
 
 

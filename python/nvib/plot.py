@@ -131,6 +131,11 @@ def _energy_unit(units: list[str]) -> str:
     return "J" if set(units) <= {"m", "rad"} else "model units"
 
 
+def _force_unit(unit: str) -> str:
+    """The unit of a force on a measure in ``unit``: N on metres, N m on radians (SI), else the model's own."""
+    return {"m": "N", "rad": "N m"}.get(unit, "model units")
+
+
 def _measure_series(result, model, measure: str):
     """(label, d, d', unit, moves with the ground) of the effect named ``measure``: d = g . u over its
     measure's DOFs. A measure whose coefficients sum to zero (a storey drift) does not see a rigid motion
@@ -171,7 +176,8 @@ def run_figure(result, model, dof, title: str | None = None, *, measure: str | N
     Left: the displacement history of ``dof`` (or, with ``measure``, the measure d = g . u of the effect
     of that name, such as a storey drift) on its own axes; a history that oscillates densely (more than
     150 cycles) gets a second panel zoomed on its first cycles; below, the other DOFs (for more than six
-    DOFs only the four that move most). Next: the phase locus (u, v) of ``dof`` (or d, d'). With
+    DOFs only the four that move most). Next: the phase locus (u, v) of ``dof`` (or d, d'), or, for a
+    ``measure`` the run recorded (``solve(record=[...])``), the effect's force-deformation loop. With
     ``result.energy``: a third panel with the energy terms and the balance. Every axis carries its unit
     (``result.units``; time in s); under a ground motion the displacements are labelled relative to the
     ground. ``dof`` is a DOF name or model index; ``title`` defaults to the scene title, the scheme and
@@ -240,19 +246,37 @@ def run_figure(result, model, dof, title: str | None = None, *, measure: str | N
         ax.set_xlabel("t [s]")
 
     ax = axes[0]
-    u, v = y[sel], yd[sel]
-    ax.plot(u, v, lw=1.0 if not zoom else 0.5, color="C0")
-    if len(u):
-        ax.plot(u[0], v[0], "o", color="C2", label=f"t = {t[0]:g} s")
-        ax.plot(u[-1], v[-1], "s", color="C3", label=f"t = {t[-1]:g} s")
-        ax.legend(fontsize=8, loc="best")
-    if failed:
-        _log_if_blown_up(ax, [y], axis="x")
-        _log_if_blown_up(ax, [yd], axis="y")
-    ax.set_xlabel(f"{short} [{unit}]")
-    ax.set_ylabel(f"d{short}/dt [{rate_unit(unit, 1)}]")
-    ax.set_title(f"Phase locus of {short}{rel_y}", fontsize=10)
-    ax.grid(True, alpha=0.3)
+    recorded = result.effects.get(measure) if measure is not None else None
+    if recorded is not None and recorded.count == 1:
+        # The force-deformation loop of the effect (its hysteresis, where it has memory).
+        f = np.asarray(recorded.force)
+        ax.plot(np.asarray(recorded.measure)[sel], f[sel], lw=1.0, color="C0")
+        if len(f):
+            ax.plot(recorded.measure[0], f[0], "o", color="C2", label=f"t = {t[0]:g} s")
+            ax.plot(recorded.measure[-1], f[-1], "s", color="C3", label=f"t = {t[-1]:g} s")
+            ax.legend(fontsize=8, loc="best")
+        ax.axhline(0.0, color="0.6", lw=0.6)
+        ax.axvline(0.0, color="0.6", lw=0.6)
+        ax.set_xlabel(f"{short} [{unit}]")
+        ax.set_ylabel(f"force of {short} [{_force_unit(unit)}]")
+        dissipated = recorded.state.get("dissipated")
+        note = f"; dissipated {float(dissipated[-1]):.4g} {_energy_unit(units)}" if dissipated is not None else ""
+        ax.set_title(f"Force-deformation loop of {short} ({recorded.type}){note}", fontsize=10)
+        ax.grid(True, alpha=0.3)
+    else:
+        u, v = y[sel], yd[sel]
+        ax.plot(u, v, lw=1.0 if not zoom else 0.5, color="C0")
+        if len(u):
+            ax.plot(u[0], v[0], "o", color="C2", label=f"t = {t[0]:g} s")
+            ax.plot(u[-1], v[-1], "s", color="C3", label=f"t = {t[-1]:g} s")
+            ax.legend(fontsize=8, loc="best")
+        if failed:
+            _log_if_blown_up(ax, [y], axis="x")
+            _log_if_blown_up(ax, [yd], axis="y")
+        ax.set_xlabel(f"{short} [{unit}]")
+        ax.set_ylabel(f"d{short}/dt [{rate_unit(unit, 1)}]")
+        ax.set_title(f"Phase locus of {short}{rel_y}", fontsize=10)
+        ax.grid(True, alpha=0.3)
 
     if energy is not None:
         ax = axes[1]

@@ -127,8 +127,9 @@ inline py::dict effect_parameters(const fx::Effect& e) {
   return d;
 }
 
-// laws: (index, coef, law, tangent or None, where, uses_velocity, uses_time) per scalar Python law.
-using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, py::object, std::string, bool, bool>;
+// laws: (index, coef, law, tangent or None, where, uses_velocity, uses_time, initial state) per scalar Python law.
+using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, py::object, std::string, bool, bool,
+                           std::vector<double>>;
 
 inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, const nvib::SparseMatrix& K,
                           const nvib::SparseMatrix& C,
@@ -152,13 +153,14 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
   f.n = ms.size();
   f.velocity = uses_velocity;
   f.time = uses_time;
-  for (auto& [index, coef, law, tan, where, vel, time] : laws) {
+  for (auto& [index, coef, law, tan, where, vel, time, initial] : laws) {
     if (index.size() != coef.size() || index.empty())
       raise_value_error(where + ".measure", "index and coef must be non-empty and equally long");
     for (Index i : index)
       if (i < 0 || i >= ms.size()) raise_value_error(where + ".measure", "DOF index " + std::to_string(i) + " is out of range");
-    f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time});
+    f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time, initial, 0});
   }
+  f.place_states();
   return PyModel{fx::make_effect_model_plus(std::move(ms), std::move(list), std::move(arrays), std::move(f), K, C),
                  std::move(dofs)};
 }

@@ -6,6 +6,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -55,13 +56,18 @@ inline py::array_t<double> checked_array(const py::handle& obj, const char* who,
 }
 
 // A scalar law given as a Python callable on a measure d = g . u:
-// law(d, d', t) -> f, acting as g^T f; tangent(d, d', t) -> (df/dd, df/dd') optional.
+// law(d, d', t) -> f, acting as g^T f; tangent(d, d', t) -> (df/dd, df/dd') optional. A law with
+// memory (state: its initial internal variables) is called law(d, d', t, state) -> (f, trial state)
+// and tangent(d, d', t, state) -> (df/dd, df/dd'), state the committed one (a tuple of floats): a
+// pure trial, committed once per accepted step like the built-in laws.
 struct PyLaw {
   std::vector<Index> index;
   std::vector<double> coef;
   py::object law, tangent = py::none();
   std::string where;  // "effects[3]", for error messages
   bool velocity = true, time = true;
+  std::vector<double> initial;  // the initial state (empty: no memory)
+  size_t offset = 0;            // where its state sits in the state buffers
 
   double measure(const CVecRef& x) const {
     double d = 0.0;
@@ -96,8 +102,18 @@ struct PyForce {
   std::vector<PyLaw> laws;
   Index n = 0;
   bool velocity = true, time = true;  // of `force`
+  std::vector<double> committed, trial;  // the states of the laws with memory (theirs, one after the other)
 
   bool empty() const { return force.is_none() && laws.empty(); }
+  // After the laws are set: their places in the state buffers.
+  void place_states() {
+    committed.clear();
+    for (PyLaw& l : laws) {
+      l.offset = committed.size();
+      committed.insert(committed.end(), l.initial.begin(), l.initial.end());
+    }
+    trial = committed;
+  }
 
   void operator()(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
     if (force.is_none()) {
@@ -110,10 +126,61 @@ struct PyForce {
     }
     for (const PyLaw& l : laws) {
       const double d = l.measure(u), dd = l.velocity ? l.measure(v) : 0.0;
-      const double f = checked_scalar(l.law(d, dd, t), l.where + ".law", t);
+      const double f = l.initial.empty() ? checked_scalar(l.law(d, dd, t), l.where + ".law", t)
+                                         : respond(l, d, dd, t, trial.data() + l.offset);
       if (!std::isfinite(f)) nonfinite(u, v, t, l.where + ".law");
       for (size_t k = 0; k < l.index.size(); ++k) out[l.index[k]] += l.coef[k] * f;
     }
+  }
+  // A law with memory at (d, d', t) from its committed state: its force, its trial state written to `next`.
+  double respond(const PyLaw& l, double d, double dd, double t, double* next) const {
+    py::object r = l.law(d, dd, t, state_tuple(l));
+    const std::string who = l.where + ".law";
+    if (!py::isinstance<py::tuple>(r) && !py::isinstance<py::list>(r))
+      throw py::type_error(who + " of a law with state must return (force, state), got " +
+                           std::string(py::str(py::type::of(r).attr("__name__"))));
+    py::sequence fs = r;
+    if (py::len(fs) != 2) throw py::type_error(who + " of a law with state must return (force, state), a pair");
+    const double f = checked_scalar(fs[0], who + " (force)", t);
+    py::sequence st = fs[1].cast<py::sequence>();
+    if (py::len(st) != l.initial.size())
+      throw py::value_error(who + " returned a state of " + std::to_string(py::len(st)) + " values, expected " +
+                            std::to_string(l.initial.size()) + " at t = " + detail::fmt(t));
+    for (size_t k = 0; k < l.initial.size(); ++k) {
+      next[k] = checked_scalar(st[k], who + " (state[" + std::to_string(k) + "])", t);
+      if (!std::isfinite(next[k]))
+        throw py::value_error(who + " returned a non-finite state[" + std::to_string(k) + "] at t = " + detail::fmt(t));
+    }
+    return f;
+  }
+  py::tuple state_tuple(const PyLaw& l) const {
+    py::tuple s(l.initial.size());
+    for (size_t k = 0; k < l.initial.size(); ++k) s[k] = py::float_(committed[l.offset + k]);
+    return s;
+  }
+
+  // ---- memory ----
+  bool has_state() const { return !committed.empty(); }
+  Index state_size() const { return static_cast<Index>(committed.size()); }
+  void get_state(double* out) const { std::copy(committed.begin(), committed.end(), out); }
+  void set_state(const double* x) { std::copy(x, x + committed.size(), committed.begin()); }
+  void reset_state() {
+    for (const PyLaw& l : laws) std::copy(l.initial.begin(), l.initial.end(), committed.begin() + static_cast<long>(l.offset));
+  }
+  void commit_last_trial(const double*, const double*, double) { committed.swap(trial); }
+  void commit_at(const double* u, const double* v, double t) {
+    for (const PyLaw& l : laws) {
+      if (l.initial.empty()) continue;
+      double d = 0.0, dd = 0.0;
+      for (size_t k = 0; k < l.index.size(); ++k) {
+        d += l.coef[k] * u[l.index[k]];
+        if (l.velocity) dd += l.coef[k] * v[l.index[k]];
+      }
+      respond(l, d, dd, t, trial.data() + l.offset);
+    }
+    for (const PyLaw& l : laws)
+      std::copy(trial.begin() + static_cast<long>(l.offset), trial.begin() + static_cast<long>(l.offset + l.initial.size()),
+                committed.begin() + static_cast<long>(l.offset));
   }
   // Overflow of a diverging run is reported as divergence by the solver: a
   // state beyond the run's divergence bound (RunBound) or of size 1e30 or more
@@ -138,7 +205,7 @@ struct PyForce {
     if (!force.is_none()) force_tangent(u, v, t, K, C);
     for (const PyLaw& l : laws) {
       const double d = l.measure(u), dd = l.velocity ? l.measure(v) : 0.0;
-      py::object r = l.tangent(d, dd, t);
+      py::object r = l.initial.empty() ? l.tangent(d, dd, t) : l.tangent(d, dd, t, state_tuple(l));
       py::tuple kc = as_pair(r, l.where + ".tangent");
       const double kd = checked_scalar(kc[0], l.where + ".tangent (df/dd)", t);
       const double cd = kc[1].is_none() ? 0.0 : checked_scalar(kc[1], l.where + ".tangent (df/dd')", t);
@@ -181,7 +248,7 @@ struct PyForce {
     for (const PyLaw& l : laws) any = any || l.time;
     return any;
   }
-  bool is_linear() const { return empty(); }
+  bool is_linear() const { return empty(); }  // (a model with memory is never linear: Model checks)
   // Energy: the energy of a user callable is unknown.
   bool accounts_energy() const { return empty(); }
   double potential(const CVecRef&, double) const { return 0.0; }

@@ -17,14 +17,16 @@ RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "ma
              "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof"}
 
 EPILOG = """\
-Scheme parameters accept fractions (--eta 1/12). Exit status: 0 success, 1 the run failed
-(diverged, Newton failed; partial --out/--plot still written), 2 bad input, 130 interrupted
-(Ctrl-C; --out holds the partial history when the core hands it over, and stderr says which).
+Scheme parameters accept fractions (--eta 1/12). Exit status: 0 success (also a structure that
+collapsed: the summary says which effect), 1 the run failed (diverged, Newton failed; partial
+--out/--plot still written), 2 bad input, 130 interrupted (Ctrl-C; --out holds the partial history
+when the core hands it over, and stderr says which).
 
 examples:
   nvib run hardening --scheme newmark --plot hardening.png
   nvib run vehicle --without contact --dof z_w1 --energy --out vehicle.npz
   nvib run building --scheme galpha --rho-inf 0.8 --dt 1e-3 --save-every 10 --out building.csv
+  nvib run building_inelastic --scheme newmark --measure storey1 --plot storey1.png
 """
 
 
@@ -55,7 +57,13 @@ def add_parser(sub) -> None:
     g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
     g.add_argument("--measure", metavar="EFFECT",
                    help="plot the measure d = g . u of the effect of this name (a storey drift: --measure storey2) "
-                        "instead of the DOF's displacement")
+                        "instead of the DOF's displacement, and its force-deformation loop (the effect is recorded)")
+    g.add_argument("--record-effect", nargs="+", action="extend", metavar="NAME", dest="record",
+                   help="record these effects (measure, rate, force, internal variables) into --out and the "
+                        "summary (default: the scene's record list)")
+    g.add_argument("--collapse-deformation", type=c.positive_real, metavar="D",
+                   help="collapse (status collapsed, the run stops) once an effect with memory deforms beyond D "
+                        "(default: the scene's; a law that loses its strength always collapses)")
     g.add_argument("--energy", action="store_true",
                    help="record the energy balance; a run whose balance error exceeds --max-energy-error times "
                         "the energy scale stops as diverged")
@@ -90,7 +98,7 @@ def load_model(args):
 
 
 def run(args) -> int:
-    from .. import _core, solve
+    from .. import Status, _core, solve
     from .._progress import ProgressBar
 
     if args.out is not None:
@@ -104,13 +112,22 @@ def run(args) -> int:
     dof = args.dof if args.dof is not None else model.scene["plot_dof"]
     if dof not in model.dofs:
         raise c.Usage("--dof", f"unknown DOF {dof!r} in scene {model.scene['name']!r} (DOFs: {', '.join(model.dofs)})")
+    named = sorted({e.name for e in (model.effects or []) if e.name} | {a.name for a in model.effect_arrays if a.name})
     if args.measure is not None:
-        named = sorted({e.name for e in (model.effects or []) if e.name})
         if args.measure not in named:
             raise c.Usage("--measure", f"no effect named {args.measure!r} in scene {model.scene['name']!r} "
                                        f"(named effects: {', '.join(named) or 'none'})")
         if not args.plot:
             raise c.Usage("--measure", "it chooses what --plot draws; give --plot too")
+    record = list(args.record) if args.record else list(model.scene.get("record") or [])
+    for name in record:
+        if name not in named:
+            raise c.Usage("--record-effect", f"no effect named {name!r} in scene {model.scene['name']!r} "
+                                             f"(named effects: {', '.join(named) or 'none'})")
+    if args.measure is not None and args.measure not in record:
+        record.append(args.measure)
+    collapse = (args.collapse_deformation if args.collapse_deformation is not None
+                else model.scene.get("collapse_deformation"))
     dt = args.dt if args.dt is not None else model.scene["dt"]
     t_end = args.t_end if args.t_end is not None else model.scene["t_end"]
     if dt is None:
@@ -131,7 +148,7 @@ def run(args) -> int:
     try:
         res = solve(model, scheme, dt=dt, t_end=t_end, save_every=save_every, throw=False,
                     max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy,
-                    max_energy_error=args.max_energy_error)
+                    max_energy_error=args.max_energy_error, record=record, collapse_deformation=collapse)
     except KeyboardInterrupt as exc:
         bar.close(done=False)
         res = getattr(exc, "result", None)  # the history saved before the interrupt (none before the loop)
@@ -164,7 +181,7 @@ def run(args) -> int:
         except OSError as exc:
             print(f"nvib run: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
             code = 1
-    if not res.success:
+    if not res.success and res.status != Status.collapsed:
         kept = f"; the partial history{reached(res, ' up to')} is in {args.out}" if args.out and code == 0 else ""
         print(f"nvib run: error: {failure_line(res, scheme, dt)}{kept}", file=sys.stderr)
         return 1
@@ -221,6 +238,24 @@ def failure_line(result, scheme, dt: float) -> str:
     return f"{f.message} (with {scheme.name}, dt = {dt:g} s)" + (f"; {hint}" if hint else "")
 
 
+def effect_line(rec, res, model) -> str:
+    """A recorded effect in one line: its peak and final deformation and force, what it dissipated."""
+    import numpy as np
+
+    from ..plot import _energy_unit, _force_unit, _unit_of
+
+    e = next((x for x in (model.effects or []) if x.name == rec.name), None)
+    unit = _unit_of([model.units[int(i)] for i in e.index]) if e is not None else "units"
+    d, f = np.asarray(rec.measure), np.asarray(rec.force)
+    if not d.size:
+        return f"{rec.type}: nothing saved"
+    text = (f"{rec.type}: peak |d| {np.abs(d).max():.4g} {unit}, final d {float(d.reshape(len(d), -1)[-1, 0]):.4g} {unit}, "
+            f"peak |f| {np.abs(f).max():.4g} {_force_unit(unit)}")
+    if "dissipated" in rec.state:
+        text += f", dissipated {float(np.asarray(rec.state['dissipated']).sum(axis=-1)[-1] if rec.count > 1 else rec.state['dissipated'][-1]):.4g} {_energy_unit(res.units)}"
+    return text + (f" ({rec.count} effects)" if rec.count > 1 else "")
+
+
 def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args) -> None:
     from .._model import rate_unit
 
@@ -252,8 +287,10 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
                                       + (" (relative to the ground)" if res.relative_to_ground else "")))
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
-        lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D - W - E0| / max energy)"
+        lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D + H - W - E0| / max energy)"
                       if math.isfinite(rel) else "relative balance error: n/a (the energies overflowed)"))
+    for name, rec in res.effects.items():
+        lines.append((name, effect_line(rec, res, model)))
     lines += [("warning", w) for w in res.warnings]
     w = max(len(k) for k, _ in lines)
     print("\n".join(f"{k:<{w}}  {v}" for k, v in lines))
