@@ -127,7 +127,7 @@ class EffectSet {
   bool is_linear() const { return c_->is_linear(); }
 
   // ---- laws with memory ----
-  bool has_state() const { return c_->has_state(); }
+  bool has_state() const { return !committed_.empty(); }
   Index state_size() const { return static_cast<Index>(committed_.size()); }
   const std::vector<double>& state() const { return committed_; }
   void get_state(double* out) const { std::copy(committed_.begin(), committed_.end(), out); }
