@@ -184,7 +184,7 @@ def test_arrays_accept_names_the_ground_and_per_effect_parameters(tmp_path):
     ({"type": "spring", "i": [0, 1], "j": [-1], "k": 1.0}, r"^effects\[0\]\.j: expected 2 entries"),
     ({"type": "power_damper", "i": [0, 1], "c": 1.0, "p": [1.0, -1.0]}, r"^effects\[0\]\.p\[1\]: the exponent"),
     ({"type": "hardening_spring", "i": [0], "k0": 1.0}, r"^effects\[0\]\.a: missing parameter"),
-    ({"type": "spring", "i": [0], "k": np.nan}, r"^effects\[0\]\.k: spring needs a finite value"),
+    ({"type": "spring", "i": [0], "k": np.nan}, r"^effects\[0\]\.k: spring needs a finite k"),
     ({"type": "spring", "i": ["q"], "k": 1.0}, r"^effects\[0\]\.i: unknown DOF 'q'"),
     ({"type": "spring", "i": [0], "kk": 1.0}, r"^effects\[0\]\.kk: unknown parameter of spring"),
     ({"type": "ground_acceleration", "i": [0], "signal": {"kind": "sine", "amplitude": 1.0, "omega": 1.0}},
