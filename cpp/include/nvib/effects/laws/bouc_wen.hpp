@@ -3,10 +3,12 @@
 // z dimensionless (|z| saturates at (A / (beta + gamma))^(1/n)), n >= 1. The evolution equation is
 // rate-independent, so over one step it is an ODE in d along the increment d_c -> d, integrated
 // inside the trial in one of two ways:
-//   integration = "exact" (default): to round-off, by an adaptive embedded Runge-Kutta pair
-//     (Dormand & Prince 1980, 5(4)) with a tolerance of a few ulps, the step landing on z = 0 where
-//     sgn(d' z) changes; the consistent tangent is then df/dd = alpha k + (1 - alpha) fy Phi(z)/dy,
-//     the derivative of the flow at its end. The law adds no error of its own to the scheme's.
+//   integration = "exact" (default): to round-off. For n = 1 the equation is linear in z between
+//     the switches of sgn(d' z) at z = 0, and its solution an exponential (with expm1 and log1p
+//     for the small arguments), landing exactly on z = 0; for other n an adaptive embedded
+//     Runge-Kutta pair (Dormand & Prince 1980, 5(4)) with a tolerance of a few ulps, its steps landing
+//     on z = 0. The consistent tangent is df/dd = alpha k + (1 - alpha) fy Phi(z)/dy, the derivative
+//     of the flow at its end. The law adds no error of its own to the scheme's.
 //   integration = "backward_euler": one implicit Euler step z = z_c + (d - d_c) Phi(z)/dy, solved by
 //     a safeguarded Newton iteration to round-off, with its algorithmic tangent: the update of
 //     OpenSees' BoucWen (first order in the increment, so a run is first order in the time step).
@@ -75,16 +77,19 @@ struct BoucWen : LawBase {
     return {x[0], fy, dy, x[3], x[4], x[5], x[6], x[7], static_cast<int>(x[8])};
   }
 
+  // |z|^n, without pow for the common n = 1 and n = 2.
+  static double power(const Params& p, double a) { return p.n == 1.0 ? a : p.n == 2.0 ? a * a : std::pow(a, p.n); }
   // Phi(z) for motion in the direction s (sgn(0) = -1, as OpenSees takes it: the stiffer branch).
   static double phi(const Params& p, double z, double s) {
     const double sz = s * z > 0.0 ? 1.0 : -1.0;
-    return p.A - std::pow(std::abs(z), p.n) * (p.beta * sz + p.gamma);
+    return p.A - power(p, std::abs(z)) * (p.beta * sz + p.gamma);
   }
   // dPhi/dz; at z = 0 (n = 1: a kink) on the side z moves to, the side of s (Phi(0) = A > 0).
   static double dphi(const Params& p, double z, double s) {
     if (z == 0.0) return p.n == 1.0 ? -s * (p.beta + p.gamma) : 0.0;
     const double sz = s * z > 0.0 ? 1.0 : -1.0;
-    return -p.n * std::pow(std::abs(z), p.n - 1.0) * (z > 0.0 ? 1.0 : -1.0) * (p.beta * sz + p.gamma);
+    const double a = std::abs(z), an1 = p.n == 1.0 ? 1.0 : p.n == 2.0 ? a : std::pow(a, p.n - 1.0);
+    return -p.n * an1 * (z > 0.0 ? 1.0 : -1.0) * (p.beta * sz + p.gamma);
   }
 
   static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
@@ -97,7 +102,10 @@ struct BoucWen : LawBase {
     } else if (p.integration == backward_euler) {
       slope = euler(p, c, delta, s, next);
     } else {
-      flow(p, c, delta, s, next);
+      if (p.n == 1.0)
+        flow_linear(p, c, delta, s, next);
+      else
+        flow(p, c, delta, s, next);
       slope = phi(p, next.z, s) / p.dy;
     }
     const double hk = (1.0 - p.alpha) * p.fy;
@@ -112,7 +120,7 @@ struct BoucWen : LawBase {
  private:
   // The rates along the increment, in tau = |d - d_c|: dz/dtau = s Phi / dy, and the dissipation.
   static void rates(const Params& p, double z, double s, double& rz, double& rw) {
-    const double az = std::pow(std::abs(z), p.n), sz = s * z > 0.0 ? 1.0 : -1.0;
+    const double az = power(p, std::abs(z)), sz = s * z > 0.0 ? 1.0 : -1.0;
     const double c = p.beta * sz + p.gamma;
     rz = s * (p.A - az * c) / p.dy;
     rw = (1.0 - p.alpha) * p.fy / p.A * az * c * (s * z);
@@ -143,6 +151,43 @@ struct BoucWen : LawBase {
     (void)w2, (void)w7;
     return {z5, w + h * (b1 * w1 + b3 * w3 + b4 * w4 + b5 * w5 + b6 * w6),
             std::abs(h * (e1 * k1 + e3 * k3 + e4 * k4 + e5 * k5 + e6 * k6 + e7 * k7))};
+  }
+
+  // n = 1: in tau = |d - d_c|, dz/dtau = (s/dy)(A - c sigma z) with sigma = sgn(z), c = beta s sigma +
+  // gamma, constant until z reaches 0; so z = z* + (z0 - z*) e^{-lambda tau}, lambda = s c sigma/dy,
+  // z* = A/(c sigma), and the dissipation rate (1 - alpha) fy/A c |z| s z = (1 - alpha) fy dy lambda z^2 / A
+  // integrates in closed form too. Moving toward zero (s z0 < 0) z reaches it after
+  // tau0 = dy log1p(|c| |z0| / A) / |c| (c = gamma - beta <= 0 there), then moves away with c = beta + gamma.
+  static void flow_linear(const Params& p, const State& c, double delta, double s, State& out) {
+    double z = c.z, w = c.dissipated, left = std::abs(delta);
+    const double K = (1.0 - p.alpha) * p.fy / p.A;
+    for (int region = 0; region < 2 && left > 0.0; ++region) {
+      const double sigma = z != 0.0 ? (z > 0.0 ? 1.0 : -1.0) : s;  // at 0, z moves the way d does
+      const double cc = p.beta * s * sigma + p.gamma;
+      double tau = left;
+      bool lands = false;
+      if (s * sigma < 0.0) {  // toward zero: where does it get there?
+        const double a = std::abs(cc), to_zero = a == 0.0 ? std::abs(z) * p.dy / p.A : p.dy * std::log1p(a * std::abs(z) / p.A) / a;
+        if (to_zero <= left) {
+          tau = to_zero;
+          lands = true;
+        }
+      }
+      if (cc == 0.0) {  // z moves at the constant rate s A/dy; no dissipation
+        z = lands ? 0.0 : z + s * p.A * tau / p.dy;
+      } else {
+        const double lambda = s * cc * sigma / p.dy, zs = p.A / (cc * sigma), D = z - zs;
+        const double e1 = std::expm1(-lambda * tau), e2 = std::expm1(-2.0 * lambda * tau);
+        // int_0^tau z^2 = zs^2 tau + 2 zs D (1 - e^{-l tau})/l + D^2 (1 - e^{-2 l tau})/(2 l)
+        const double z2 = zs * zs * tau - 2.0 * zs * D * e1 / lambda - D * D * e2 / (2.0 * lambda);
+        w += K * p.dy * lambda * z2;
+        z = lands ? 0.0 : z + D * e1;  // zs + D e^{-l tau} = z0 + D expm1(-l tau)
+      }
+      left -= tau;
+      if (!lands) break;
+    }
+    out.z = z;
+    out.dissipated = w;
   }
 
   // z along the increment to a few ulps: adaptive steps, and a step that would carry z across 0
@@ -195,7 +240,9 @@ struct BoucWen : LawBase {
   // Newton step leaves the bracket. Returns dz/dd, the algorithmic tangent.
   static double euler(const Params& p, const State& c, double delta, double s, State& out) {
     auto R = [&](double z) { return z - c.z - delta * phi(p, z, s) / p.dy; };
-    double lo = c.z - std::abs(R(c.z)), hi = c.z + std::abs(R(c.z)), z = c.z;
+    const double eps = std::numeric_limits<double>::epsilon();
+    const double r0 = R(c.z);
+    double lo = c.z - std::abs(r0), hi = c.z + std::abs(r0), z = c.z;
     for (int it = 0; it < 200; ++it) {
       const double r = R(z);
       if (r == 0.0) break;
@@ -205,12 +252,10 @@ struct BoucWen : LawBase {
         lo = std::max(lo, z);
       const double dr = 1.0 - delta * dphi(p, z, s) / p.dy;
       double zn = z - r / dr;
-      if (!(zn > lo && zn < hi)) zn = 0.5 * (lo + hi);
-      if (std::abs(zn - z) <= 2.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(z)) || hi - lo <= 0.0) {
-        z = zn;
-        break;
-      }
+      if (!(zn >= lo && zn <= hi)) zn = 0.5 * (lo + hi);  // a Newton step out of the bracket: bisect
+      const bool done = std::abs(zn - z) <= 2.0 * eps * std::abs(zn) || hi - lo <= 2.0 * eps * std::abs(hi);
       z = zn;
+      if (done) break;
     }
     out.z = z;
     // The work of the hysteretic force over the step by the trapezoid rule, less the stored energy's change.
