@@ -153,6 +153,10 @@ class Model {
     has_C_ = check_linear_part(C, "C", n);
     lin->K = std::move(K);
     lin->C = std::move(C);
+    lin->Kr = lin->K;
+    lin->Cr = lin->C;
+    lin->Kr.makeCompressed();
+    lin->Cr.makeCompressed();
     lin_ = std::move(lin);
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
@@ -334,8 +338,23 @@ class Model {
       f_.eval(u.data(), v.data(), t, out.data());
     else
       f_(u, v, t, out);
-    if (has_K_) out.noalias() += lin_->K * u;
-    if (has_C_) out.noalias() += lin_->C * v;
+    if (has_K_ || has_C_) add_linear(u.data(), v.data(), out.data());
+  }
+  // out += K u + C v in one pass by rows (their row-major copies), each row's terms in the order of a
+  // product by columns: K's, then C's, columns ascending.
+  void add_linear(const double* __restrict u, const double* __restrict v, double* __restrict out) const {
+    const RowMatrix &K = lin_->Kr, &C = lin_->Cr;
+    const int *ko = K.outerIndexPtr(), *ki = K.innerIndexPtr(), *co = C.outerIndexPtr(), *ci = C.innerIndexPtr();
+    const double *kv = K.valuePtr(), *cv = C.valuePtr();
+    const bool k = has_K_, c = has_C_;
+    for (Index i = 0, n = size(); i < n; ++i) {
+      double s = out[i];
+      if (k)
+        for (int q = ko[i], e = ko[i + 1]; q < e; ++q) s += kv[q] * u[ki[q]];
+      if (c)
+        for (int q = co[i], e = co[i + 1]; q < e; ++q) s += cv[q] * v[ci[q]];
+      out[i] = s;
+    }
   }
 
   // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
@@ -385,8 +404,10 @@ class Model {
 
   Mass mass_;
   // The linear parts, never changed after construction: shared by the copies of the model.
+  using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
   struct Linear {
     SparseMatrix K, C;
+    RowMatrix Kr, Cr;  // the same by rows, for the force
   };
   // out += |A| |x| (no stored |A|: it is only needed for round-off estimates)
   static void add_abs_product(const SparseMatrix& A, const CVecRef& x, VecRef out) {

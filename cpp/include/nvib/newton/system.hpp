@@ -9,6 +9,8 @@
 //   Index first_nonfinite_tangent_row() const           -1 if the last tangent is finite
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "../base/types.hpp"
@@ -31,24 +33,42 @@ class IterationSystem {
   const char* name() const { return !chosen_ ? "" : dense_ ? kDenseName : sparse_lu_.name(); }
   bool is_dense() const { return dense_; }
 
+  // Assembles S and factorises it, unless it is, bit for bit, the S factorised last (a piecewise-linear
+  // law on the same branch): then the factors are kept and reused() says so.
   template <class ModelT>
   bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference,
                  LinearSolverChoice choice = LinearSolverChoice::automatic) {
     if (!chosen_) choose(model, finite_difference, choice);
+    reused_ = false;
     if (dense_) {
-      if (dense_S_.size() != model.size()) {
+      if (dense_S_.size() != model.size() || S_.rows() != model.size()) {
         dense_S_.resize(model.size());
         lu_.resize(model.size());
+        S_.setZero(model.size(), model.size());
+        have_last_ = false;
       }
       st.linear_solver = kDenseName;
-      dense_S_.assemble(model, im, st, finite_difference, lu_.assembly());
-      return lu_.factorize_assembled();
+      dense_S_.assemble(model, im, st, finite_difference, S_);
+      if (have_last_ && same(S_.data(), last_.data(), S_.size())) return reused_ = true, last_ok_;
+      lu_.assembly() = S_;
+      last_ok_ = lu_.factorize_assembled();
+      last_ = S_;
+      have_last_ = true;
+      return last_ok_;
     }
-    if (!sparse_S_.assemble(model, im, st)) return false;
-    const bool ok = sparse_lu_.factorize(sparse_S_.matrix());
+    if (!sparse_S_.assemble(model, im, st)) return have_last_ = false;
+    const SparseMatrix& S = sparse_S_.matrix();
     st.linear_solver = sparse_lu_.name();
-    return ok;
+    if (have_last_ && same(S.valuePtr(), last_.data(), S.nonZeros())) return reused_ = true, last_ok_;
+    last_ok_ = sparse_lu_.factorize(S);
+    st.linear_solver = sparse_lu_.name();
+    last_.resize(S.nonZeros(), 1);
+    std::copy(S.valuePtr(), S.valuePtr() + S.nonZeros(), last_.data());
+    have_last_ = true;
+    return last_ok_;
   }
+  // The last factorize() kept the factors of an identical S.
+  bool reused() const { return reused_; }
   void solve_in_place(Vector& x) const {
     if (dense_)
       lu_.solve_in_place(x);
@@ -109,7 +129,15 @@ class IterationSystem {
     sparse_lu_.analyze(sparse_S_.matrix(), sparse_S_.symmetric());
   }
 
+  static bool same(const double* a, const double* b, Index n) {
+    for (Index k = 0; k < n; ++k)
+      if (!(a[k] == b[k]) || std::signbit(a[k]) != std::signbit(b[k])) return false;
+    return true;
+  }
+
   bool chosen_ = false, dense_ = true;
+  bool have_last_ = false, last_ok_ = false, reused_ = false;
+  Matrix S_, last_;  // the assembled S (dense), and the S of the factors kept (dense, or the sparse values)
   DenseIterationMatrix dense_S_;
   DenseLU lu_;
   SparseIterationMatrix sparse_S_;
