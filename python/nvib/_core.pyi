@@ -30,6 +30,7 @@ class Stats:
     num_tangent_evals: int
     num_newton_iters: int
     num_factorizations: int
+    num_reused_factorizations: int
     num_linear_solves: int
     num_expm: int
     wall_time: float

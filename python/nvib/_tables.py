@@ -17,8 +17,7 @@ from ._model import rate_unit
 __all__ = ["load_result"]
 
 _ENERGY = ("kinetic", "potential", "work_in", "dissipated", "hysteretic", "balance_error")
-_COUNTERS = ("num_steps", "num_force_evals", "num_fd_force_evals", "num_tangent_evals", "num_newton_iters",
-             "num_factorizations", "num_linear_solves", "num_expm")
+_COUNTERS = tuple(k for k in Stats().as_dict() if k.startswith("num_"))  # in the core's order
 
 
 def _need(module: str, extra: str, what: str):

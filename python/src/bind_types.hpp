@@ -61,14 +61,7 @@ auto interruptible(bool calls_python, F&& f) {
 
 inline py::dict stats_dict(const nvib::Stats& s) {
   py::dict d;
-  d["num_steps"] = s.num_steps;
-  d["num_force_evals"] = s.num_force_evals;
-  d["num_fd_force_evals"] = s.num_fd_force_evals;
-  d["num_tangent_evals"] = s.num_tangent_evals;
-  d["num_newton_iters"] = s.num_newton_iters;
-  d["num_factorizations"] = s.num_factorizations;
-  d["num_linear_solves"] = s.num_linear_solves;
-  d["num_expm"] = s.num_expm;
+  nvib::Stats::counters(s, [&](const char* name, std::int64_t c, const char*) { d[name] = c; });
   d["wall_time"] = s.wall_time;
   d["linear_solver"] = std::string(s.linear_solver);
   return d;
@@ -116,39 +109,36 @@ inline void bind_types(py::module_& m) {
       .value("collapsed", Status::collapsed)
       .finalize();
 
-  py::class_<Stats>(m, "Stats", "Counters summed over a run (never reset per step).")
-      .def(py::init<>())
-      .def_readonly("num_steps", &Stats::num_steps)
-      .def_readonly("num_force_evals", &Stats::num_force_evals, "evaluations of F(u, v, t) asked for by the scheme")
-      .def_readonly("num_fd_force_evals", &Stats::num_fd_force_evals, "extra evaluations of finite-difference tangents")
-      .def_readonly("num_tangent_evals", &Stats::num_tangent_evals)
-      .def_readonly("num_newton_iters", &Stats::num_newton_iters)
-      .def_readonly("num_factorizations", &Stats::num_factorizations)
-      .def_readonly("num_linear_solves", &Stats::num_linear_solves)
-      .def_readonly("num_expm", &Stats::num_expm)
-      .def_readonly("wall_time", &Stats::wall_time, "seconds")
+  py::class_<Stats> stats(m, "Stats", "Counters summed over a run (never reset per step).");
+  stats.def(py::init<>());
+  Stats probe;
+  Stats::counters(probe, [&](const char* name, std::int64_t& c, const char* doc) {
+    const std::ptrdiff_t offset = reinterpret_cast<char*>(&c) - reinterpret_cast<char*>(&probe);
+    stats.def_property_readonly(
+        name, [offset](const Stats& s) { return *reinterpret_cast<const std::int64_t*>(reinterpret_cast<const char*>(&s) + offset); },
+        doc);
+  });
+  stats.def_readonly("wall_time", &Stats::wall_time, "seconds")
       .def_property_readonly("linear_solver", [](const Stats& s) { return std::string(s.linear_solver); },
                              "the implicit schemes' linear solver: 'dense LU', 'sparse LDLT' or 'sparse LU' ('' if none)")
       .def("as_dict", &stats_dict)
       .def(py::pickle(
-          [](const Stats& s) {
-            return py::make_tuple(s.num_steps, s.num_force_evals, s.num_fd_force_evals, s.num_tangent_evals,
-                                  s.num_newton_iters, s.num_factorizations, s.num_linear_solves, s.num_expm,
-                                  s.wall_time, std::string(s.linear_solver));
+          [](const Stats& s) {  // the counters in order, then wall_time and linear_solver
+            py::list x;
+            Stats::counters(s, [&](const char*, std::int64_t c, const char*) { x.append(c); });
+            x.append(s.wall_time);
+            x.append(std::string(s.linear_solver));
+            return py::tuple(x);
           },
           [](const py::tuple& x) {
-            if (x.size() != 10) raise_value_error("state", "not a pickled Stats");
             Stats s;
-            s.num_steps = x[0].cast<std::int64_t>();
-            s.num_force_evals = x[1].cast<std::int64_t>();
-            s.num_fd_force_evals = x[2].cast<std::int64_t>();
-            s.num_tangent_evals = x[3].cast<std::int64_t>();
-            s.num_newton_iters = x[4].cast<std::int64_t>();
-            s.num_factorizations = x[5].cast<std::int64_t>();
-            s.num_linear_solves = x[6].cast<std::int64_t>();
-            s.num_expm = x[7].cast<std::int64_t>();
-            s.wall_time = x[8].cast<double>();
-            s.linear_solver = linear_solver_name(x[9].cast<std::string>());
+            size_t k = 0;
+            Stats::counters(s, [&](const char*, std::int64_t&, const char*) { ++k; });
+            if (x.size() != k + 2) raise_value_error("state", "not a pickled Stats");
+            k = 0;
+            Stats::counters(s, [&](const char*, std::int64_t& c, const char*) { c = x[k++].cast<std::int64_t>(); });
+            s.wall_time = x[k].cast<double>();
+            s.linear_solver = linear_solver_name(x[k + 1].cast<std::string>());
             return s;
           }))
       .def("__repr__", [](const Stats& s) {

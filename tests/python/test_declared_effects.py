@@ -177,7 +177,10 @@ def test_removing_the_nonlinear_effect_removes_its_cost(tmp_path, scheme):
     assert a.num_steps == b.num_steps == 1000
     # the contacts need Newton iterations and new tangents; without them one solve per step
     assert a.num_newton_iters > a.num_steps  # a nonlinear step takes two or more (measured: 1.33 per step)
-    assert a.num_factorizations > a.num_steps
+    assert a.num_factorizations + a.num_reused_factorizations == a.num_newton_iters
+    # while a wheel is off the rail its contact's tangent is zero: the iteration matrix repeats and keeps its
+    # factors (measured: 546 factorisations for 1332 iterations)
+    assert 0 < a.num_reused_factorizations and a.num_factorizations > a.num_steps / 2
     assert b.num_newton_iters == b.num_steps and b.num_factorizations == 1
     assert b.num_force_evals == b.num_steps + 1 < a.num_force_evals
 

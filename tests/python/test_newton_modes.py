@@ -116,7 +116,7 @@ def test_tangent_evaluations_per_mode():
         n = {m: nvib.solve(hardening(), cls(iteration=m), dt=1e-3, t_end=0.3).stats for m in MODES}
         assert n["initial"].num_factorizations == 1
         assert n["modified"].num_factorizations == n["modified"].num_steps == 300
-        assert n["newton"].num_factorizations == n["newton"].num_newton_iters > 300
+        assert n["newton"].num_factorizations + n["newton"].num_reused_factorizations == n["newton"].num_newton_iters > 300
         assert n["incremental"].num_factorizations == n["incremental"].num_newton_iters == 300
         assert n["one_iteration"].num_newton_iters == 300
 

@@ -5,32 +5,46 @@
 
 namespace nvib {
 
-// Counters summed over a whole solve (never reset per step).
+// Counters summed over a whole solve (never reset per step), declared once in counters(): the
+// binding, the files and the sums read that list.
 struct Stats {
   std::int64_t num_steps = 0;
-  std::int64_t num_force_evals = 0;     // evaluations of F(u, v, t) asked for by the scheme
-  std::int64_t num_fd_force_evals = 0;  // extra evaluations spent on finite-difference tangents
-  std::int64_t num_tangent_evals = 0;   // tangent (K_t, C_t) evaluations, analytic or finite-difference
+  std::int64_t num_force_evals = 0;
+  std::int64_t num_fd_force_evals = 0;
+  std::int64_t num_tangent_evals = 0;
   std::int64_t num_newton_iters = 0;
   std::int64_t num_factorizations = 0;
+  std::int64_t num_reused_factorizations = 0;
   std::int64_t num_linear_solves = 0;
   std::int64_t num_expm = 0;
   double wall_time = 0.0;  // seconds
   const char* linear_solver = "";  // of the implicit schemes' Newton iteration: "dense LU", "sparse LDLT", ...
+
+  // v(name, counter, meaning) for every counter, in order.
+  template <class Self, class V>
+  static void counters(Self& s, V&& v) {
+    v("num_steps", s.num_steps, "accepted steps");
+    v("num_force_evals", s.num_force_evals, "evaluations of F(u, v, t) asked for by the scheme");
+    v("num_fd_force_evals", s.num_fd_force_evals, "extra evaluations spent on finite-difference tangents");
+    v("num_tangent_evals", s.num_tangent_evals, "tangent (K_t, C_t) evaluations, analytic or finite-difference");
+    v("num_newton_iters", s.num_newton_iters, "Newton iterations");
+    v("num_factorizations", s.num_factorizations, "factorisations of an iteration matrix");
+    v("num_reused_factorizations", s.num_reused_factorizations,
+      "iteration matrices identical to the one factorised last, whose factors were kept");
+    v("num_linear_solves", s.num_linear_solves, "solves with a factorised iteration matrix");
+    v("num_expm", s.num_expm, "matrix exponentials (PIM)");
+  }
 
   Stats& operator+=(const Stats& o) { return combine(o, 1); }
   Stats& operator-=(const Stats& o) { return combine(o, -1); }
 
  private:
   Stats& combine(const Stats& o, int sign) {
-    num_steps += sign * o.num_steps;
-    num_force_evals += sign * o.num_force_evals;
-    num_fd_force_evals += sign * o.num_fd_force_evals;
-    num_tangent_evals += sign * o.num_tangent_evals;
-    num_newton_iters += sign * o.num_newton_iters;
-    num_factorizations += sign * o.num_factorizations;
-    num_linear_solves += sign * o.num_linear_solves;
-    num_expm += sign * o.num_expm;
+    std::int64_t* mine[16];
+    int k = 0;
+    counters(*this, [&](const char*, std::int64_t& c, const char*) { mine[k++] = &c; });
+    k = 0;
+    counters(o, [&](const char*, const std::int64_t& c, const char*) { *mine[k++] += sign * c; });
     wall_time += sign * o.wall_time;
     if (sign > 0 && *o.linear_solver) linear_solver = o.linear_solver;
     return *this;

@@ -165,7 +165,10 @@ class NewtonSolver {
   Status factorize(Problem& p, ModelT& model, const IterationMatrix& im, double t, std::int64_t step, Stats& st) {
     poll_interrupt();  // a large model's factorisation can take a second
     const bool regular = ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference, opt_.linear_solver);
-    if (!ls_.reused()) ++st.num_factorizations;  // (an S identical to the last keeps its factors)
+    if (ls_.reused())
+      ++st.num_reused_factorizations;  // an S identical to the last keeps its factors
+    else
+      ++st.num_factorizations;
     factorized_ = true;
     if (regular) return Status::success;
     // An overflowing force overflows its tangent too: that is divergence, not a singular matrix.

@@ -25,8 +25,10 @@ struct Bilinear : LawBase {
   struct State {
     double dp;          // slip of the slider (plastic deformation)
     double dissipated;  // energy dissipated: fy times the accumulated |slip|
+    double d;           // the deformation it was committed at
+    double kt;          // the slope of its last step (elastic k, or b k while yielding)
   };
-  static constexpr std::array<const char*, 2> state_names{{"plastic_deformation", "dissipated"}};
+  static constexpr std::array<const char*, 4> state_names{{"plastic_deformation", "dissipated", "deformation", "tangent"}};
 
   static void validate(const double* x) {
     NVIB_CHECK(x[0] > 0.0, "k", "must be > 0, got " + detail::fmt(x[0]));
@@ -35,15 +37,19 @@ struct Bilinear : LawBase {
   }
   static Params prepare(const double* x, const Signal*) { return {x[0], x[1], x[2] * x[0] / (1.0 - x[2])}; }
 
-  // Elastic trial, then the closest-point return to |f - H dp| <= fy (exact for one increment).
+  static State initial(const Params& p) { return {0.0, 0.0, 0.0, p.k}; }
+  // Elastic trial, then the closest-point return to |f - H dp| <= fy (exact for one increment). At the
+  // committed deformation itself the slope is that of the last step (the loading one while yielding:
+  // the tangent a step that goes on loading sees, as OpenSees' Steel01 returns its committed tangent).
   static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
     const double f_trial = p.k * (d - c.dp);
+    if (d == c.d) return {f_trial, c.kt, 0.0, c};
     const double xi = f_trial - p.H * c.dp;          // the force on the slider
     const double excess = std::abs(xi) - p.fy;
-    if (excess <= 0.0) return {f_trial, p.k, 0.0, c};
+    if (excess <= 0.0) return {f_trial, p.k, 0.0, {c.dp, c.dissipated, d, p.k}};
     const double slip = excess / (p.k + p.H);        // |increment of dp|
-    const double s = xi > 0.0 ? 1.0 : -1.0;
-    return {f_trial - p.k * slip * s, p.k * p.H / (p.k + p.H), 0.0, {c.dp + s * slip, c.dissipated + p.fy * slip}};
+    const double s = xi > 0.0 ? 1.0 : -1.0, kt = p.k * p.H / (p.k + p.H);
+    return {f_trial - p.k * slip * s, kt, 0.0, {c.dp + s * slip, c.dissipated + p.fy * slip, d, kt}};
   }
   // The spring's energy and the back spring's (given back by a reversed slip).
   static double recoverable(const Params& p, const State& s, double d) {

@@ -51,8 +51,9 @@ struct BoucWen : LawBase {
     double z;           // the hysteretic variable (dimensionless)
     double dissipated;  // energy dissipated by the hysteretic part
     double d;           // the deformation at which z holds
+    double kt;          // the slope df/dd at the end of its last step
   };
-  static constexpr std::array<const char*, 3> state_names{{"z", "dissipated", "deformation"}};
+  static constexpr std::array<const char*, 4> state_names{{"z", "dissipated", "deformation", "tangent"}};
 
   static void validate(const double* x) {
     NVIB_CHECK(x[0] > 0.0, "k", "must be > 0, got " + detail::fmt(x[0]));
@@ -92,14 +93,17 @@ struct BoucWen : LawBase {
     return -p.n * an1 * (z > 0.0 ? 1.0 : -1.0) * (p.beta * sz + p.gamma);
   }
 
+  static State initial(const Params& p) { return {0.0, 0.0, 0.0, p.alpha * p.k + (1.0 - p.alpha) * p.fy * p.A / p.dy}; }
+  // At the committed deformation itself (no increment, so no direction) the slope is that of the last
+  // step's end, the one a step that goes on in the same direction sees.
   static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
     const double delta = d - c.d, s = delta > 0.0 ? 1.0 : -1.0;
+    const double hk = (1.0 - p.alpha) * p.fy;
+    if (delta == 0.0) return {p.alpha * p.k * d + hk * c.z, c.kt, 0.0, c};
     State next = c;
     next.d = d;
     double slope;  // dz/dd at the end
-    if (delta == 0.0) {
-      slope = phi(p, c.z, s) / p.dy;
-    } else if (p.integration == backward_euler) {
+    if (p.integration == backward_euler) {
       slope = euler(p, c, delta, s, next);
     } else {
       if (p.n == 1.0)
@@ -108,8 +112,8 @@ struct BoucWen : LawBase {
         flow(p, c, delta, s, next);
       slope = phi(p, next.z, s) / p.dy;
     }
-    const double hk = (1.0 - p.alpha) * p.fy;
-    return {p.alpha * p.k * d + hk * next.z, p.alpha * p.k + hk * slope, 0.0, next};
+    next.kt = p.alpha * p.k + hk * slope;
+    return {p.alpha * p.k * d + hk * next.z, next.kt, 0.0, next};
   }
   static double recoverable(const Params& p, const State& s, double d) {
     return 0.5 * p.alpha * p.k * d * d + 0.5 * (1.0 - p.alpha) * p.fy * p.dy * s.z * s.z / p.A;
