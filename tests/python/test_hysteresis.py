@@ -472,6 +472,10 @@ def test_collapse_arguments():
             nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=0.1, collapse_deformation=bad)
     with pytest.raises(TypeError, match=r"^stop_at_collapse"):
         nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=0.1, stop_at_collapse="no")
+    # a limit on effects with memory, for a model that has none, is refused rather than ignored
+    elastic = nvib.Model([1.0], effects=[{"type": "hardening_spring", "measure": {0: 1.0}, "k0": 1.0, "a": 1.0}])
+    with pytest.raises(ValueError, match=r"^collapse_deformation: applies to effects with memory"):
+        nvib.solve(elastic, nvib.Newmark(), dt=1e-3, t_end=0.1, collapse_deformation=1.0)
 
 
 # ---------------------------------------------------------------------------

@@ -165,13 +165,12 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   if (opt.energy) energy.emplace(res, model, nsave, energy_limit, st.dt());
   std::optional<observe::EffectRecorder> recorder;
   if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, nsave);
+  NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
+             "applies to effects with memory, and this model has none");
   std::optional<observe::CollapseWatch> collapse;
   if (set != nullptr && opt.stop_at_collapse) {
     collapse.emplace(*set, opt.collapse_deformation);
     if (!collapse->active()) collapse.reset();
-  } else {
-    NVIB_CHECK(std::isnan(opt.collapse_deformation) || set != nullptr, "collapse_deformation",
-               "the model has no declared effects with memory");
   }
   Index row = 0;
   auto save = [&] {
