@@ -50,8 +50,8 @@ def test_the_state_vector_holds_the_internal_variables():
     """Stepper.state() ends with the committed internal variables, in the laws' order, width per law."""
     model = memory_chain()
     widths = {t: len(nvib._core.laws()[t]["state"]) for t in laws_with_memory()}
-    assert widths == {"bilinear": 4, "friction": 4, "bouc_wen": 4, "imk_peak_oriented": 32}
-    assert model._core.state_size == 4 + 4 + 4 + 4 + 32
+    assert widths == {"bilinear": 3, "friction": 3, "bouc_wen": 4, "imk_peak_oriented": 32}
+    assert model._core.state_size == 3 + 3 + 4 + 4 + 32
     st = nvib.Stepper(model, nvib.CEMDTS(), dt=1e-3)
     st.step(500)
     x = st.state()

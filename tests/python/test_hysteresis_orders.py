@@ -297,7 +297,7 @@ def elastic_stretch(t):
 
 
 def stretch_state(name: str, st: nvib.Stepper, dt: float) -> np.ndarray:
-    """The carried state at t = 0 on the closed form: [u; v; a; history; dp, dissipated, d, tangent]; the history
+    """The carried state at t = 0 on the closed form: [u; v; a; history; dp, dissipated, d]; the history
     (a_{n-1}; PIM's remainders r = a + w^2 x at t, t - dt, t - 2 dt, its linear part being the elastic k)
     from the closed form extended back, elastic there too."""
     x0, v0, a0 = elastic_stretch([0.0, -dt, -2 * dt, -0.5 * dt])
@@ -312,7 +312,7 @@ def stretch_state(name: str, st: nvib.Stepper, dt: float) -> np.ndarray:
         hist = list(a0[:3] + EOMEGA**2 * x0[:3])
     else:
         hist = []
-    x = np.array(head + hist + [EDP, EFY * EDP, x0[0], EK])
+    x = np.array(head + hist + [EDP, EFY * EDP, x0[0]])
     assert x.size == size, (name, size)
     return x
 

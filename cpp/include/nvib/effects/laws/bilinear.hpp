@@ -26,9 +26,8 @@ struct Bilinear : LawBase {
     double dp;          // slip of the slider (plastic deformation)
     double dissipated;  // energy dissipated: fy times the accumulated |slip|
     double d;           // the deformation it was committed at
-    double kt;          // the slope of its last step (elastic k, or b k while yielding)
   };
-  static constexpr std::array<const char*, 4> state_names{{"plastic_deformation", "dissipated", "deformation", "tangent"}};
+  static constexpr std::array<const char*, 3> state_names{{"plastic_deformation", "dissipated", "deformation"}};
 
   static void validate(const double* x) {
     NVIB_CHECK(x[0] > 0.0, "k", "must be > 0, got " + detail::fmt(x[0]));
@@ -37,19 +36,19 @@ struct Bilinear : LawBase {
   }
   static Params prepare(const double* x, const Signal*) { return {x[0], x[1], x[2] * x[0] / (1.0 - x[2])}; }
 
-  static State initial(const Params& p) { return {0.0, 0.0, 0.0, p.k}; }
   // Elastic trial, then the closest-point return to |f - H dp| <= fy (exact for one increment). At the
-  // committed deformation itself the slope is that of the last step (the loading one while yielding:
-  // the tangent a step that goes on loading sees, as OpenSees' Steel01 returns its committed tangent).
+  // committed deformation itself, on the yield surface (where a step that yielded ends), the slope is the
+  // loading one, b k: the tangent a step that goes on loading sees, as OpenSees' Steel01 returns its
+  // committed tangent there.
   static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
     const double f_trial = p.k * (d - c.dp);
-    if (d == c.d) return {f_trial, c.kt, 0.0, c};
     const double xi = f_trial - p.H * c.dp;          // the force on the slider
-    const double excess = std::abs(xi) - p.fy;
-    if (excess <= 0.0) return {f_trial, p.k, 0.0, {c.dp, c.dissipated, d, p.k}};
+    const double excess = std::abs(xi) - p.fy, kt = p.k * p.H / (p.k + p.H);
+    if (d == c.d) return {f_trial, excess >= -1e-9 * p.fy ? kt : p.k, 0.0, c};
+    if (excess <= 0.0) return {f_trial, p.k, 0.0, {c.dp, c.dissipated, d}};
     const double slip = excess / (p.k + p.H);        // |increment of dp|
-    const double s = xi > 0.0 ? 1.0 : -1.0, kt = p.k * p.H / (p.k + p.H);
-    return {f_trial - p.k * slip * s, kt, 0.0, {c.dp + s * slip, c.dissipated + p.fy * slip, d, kt}};
+    const double s = xi > 0.0 ? 1.0 : -1.0;
+    return {f_trial - p.k * slip * s, kt, 0.0, {c.dp + s * slip, c.dissipated + p.fy * slip, d}};
   }
   // The spring's energy and the back spring's (given back by a reversed slip).
   static double recoverable(const Params& p, const State& s, double d) {

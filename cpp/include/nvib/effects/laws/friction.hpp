@@ -25,9 +25,8 @@ struct Friction : LawBase {
     double slip;        // accumulated slip (signed)
     double dissipated;  // fs times the accumulated |slip|
     double d;           // the deformation it was committed at
-    double kt;          // the slope of its last step (k sticking, 0 slipping)
   };
-  static constexpr std::array<const char*, 4> state_names{{"slip", "dissipated", "deformation", "tangent"}};
+  static constexpr std::array<const char*, 3> state_names{{"slip", "dissipated", "deformation"}};
 
   static void validate(const double* x) {
     NVIB_CHECK(x[0] > 0.0, "k", "the stick stiffness must be > 0, got " + detail::fmt(x[0]));
@@ -44,15 +43,16 @@ struct Friction : LawBase {
   }
   static Params prepare(const double* x, const Signal*) { return {x[0], is_unset(x[1]) ? x[2] * x[3] : x[1]}; }
 
-  static State initial(const Params& p) { return {0.0, 0.0, 0.0, p.k}; }
-  // At the committed deformation itself the slope is that of the last step (0 while slipping).
+  // At the committed deformation itself, at the slip force (where a step that slipped ends), the slope
+  // is 0: the one a step that goes on slipping sees.
   static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
     const double f_trial = p.k * (d - c.slip);
-    if (d == c.d) return {std::abs(f_trial) > p.fs ? std::copysign(p.fs, f_trial) : f_trial, c.kt, 0.0, c};
     const double excess = std::abs(f_trial) - p.fs;
-    if (excess <= 0.0) return {f_trial, p.k, 0.0, {c.slip, c.dissipated, d, p.k}};
+    if (d == c.d)
+      return {excess > 0.0 ? std::copysign(p.fs, f_trial) : f_trial, excess >= -1e-9 * p.fs ? 0.0 : p.k, 0.0, c};
+    if (excess <= 0.0) return {f_trial, p.k, 0.0, {c.slip, c.dissipated, d}};
     const double s = f_trial > 0.0 ? 1.0 : -1.0, slip = excess / p.k;
-    return {s * p.fs, 0.0, 0.0, {c.slip + s * slip, c.dissipated + p.fs * slip, d, 0.0}};
+    return {s * p.fs, 0.0, 0.0, {c.slip + s * slip, c.dissipated + p.fs * slip, d}};
   }
   static double recoverable(const Params& p, const State& s, double d) {
     const double e = d - s.slip;
