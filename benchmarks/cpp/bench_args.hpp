@@ -7,9 +7,31 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
+
+// "key v1 v2 ..." per line ('#' starts a comment): the model files benchmarks/hysteresis.py writes.
+inline std::map<std::string, std::vector<double>> read_keyed(const char* path) {
+  std::map<std::string, std::vector<double>> out;
+  std::ifstream in(path);
+  if (!in) {
+    std::fprintf(stderr, "cannot read %s\n", path);
+    std::exit(2);
+  }
+  std::string line, key;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    if (!(s >> key) || key[0] == '#') continue;
+    std::vector<double>& v = out[key];
+    double x;
+    while (s >> x) v.push_back(x);
+  }
+  return out;
+}
 
 // Removes a trailing --dump=PREFIX from the arguments and returns PREFIX ("" if absent).
 inline std::string take_dump(int& argc, char** argv) {

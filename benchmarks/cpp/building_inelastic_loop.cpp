@@ -95,24 +95,6 @@ struct Building {
   std::vector<double> rt, ra;    // the record: times, values
 };
 
-// "key v1 v2 ..." per line ('#' starts a comment).
-std::map<std::string, std::vector<double>> read_keyed(const char* path) {
-  std::map<std::string, std::vector<double>> out;
-  std::ifstream in(path);
-  if (!in) {
-    std::fprintf(stderr, "cannot read %s\n", path);
-    std::exit(2);
-  }
-  std::string line, key;
-  while (std::getline(in, line)) {
-    std::istringstream s(line);
-    if (!(s >> key) || key[0] == '#') continue;
-    std::vector<double>& v = out[key];
-    double x;
-    while (s >> x) v.push_back(x);
-  }
-  return out;
-}
 
 Building read_building(const char* path) {
   auto f = read_keyed(path);

@@ -41,24 +41,6 @@
 
 namespace {
 
-// "key v1 v2 ..." per line ('#' starts a comment): the format of building_inelastic_loop.cpp.
-std::map<std::string, std::vector<double>> read_keyed(const char* path) {
-  std::map<std::string, std::vector<double>> out;
-  std::ifstream in(path);
-  if (!in) {
-    std::fprintf(stderr, "cannot read %s\n", path);
-    std::exit(2);
-  }
-  std::string line, key;
-  while (std::getline(in, line)) {
-    std::istringstream s(line);
-    if (!(s >> key) || key[0] == '#') continue;
-    std::vector<double>& v = out[key];
-    double x;
-    while (s >> x) v.push_back(x);
-  }
-  return out;
-}
 
 struct Input {
   std::map<std::string, std::vector<double>> f;

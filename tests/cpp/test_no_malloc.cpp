@@ -6,25 +6,11 @@
 #include <stdexcept>
 #include <string>
 
-#undef NDEBUG  // Eigen's malloc check is an eigen_assert
-#define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x) \
-  if (!(x)) throw std::runtime_error("eigen_assert failed: " #x)
+#include "counting_new.hpp"  // first: it sets up Eigen's allocation check
 
 #include <nvib/nvib.hpp>
 
 #include "check.hpp"
-
-static std::atomic<long> g_news{0};
-static std::atomic<bool> g_counting{false};
-
-void* operator new(std::size_t n) {
-  if (g_counting) ++g_news;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 struct Duffing {  // hardening spring + cubic damping, with an analytic tangent
   void operator()(const nvib::CVecRef& u, const nvib::CVecRef& v, double, nvib::VecRef out) const {
