@@ -302,3 +302,55 @@ def test_renamed_scheme_option_is_refused_naming_the_new_one(capsys):
     assert code == 2 and "argument --order: renamed --interpolation (polynomial degree of the interpolation" in err
     code, out, _ = run_cli(capsys, "run", "hardening", "--scheme", "pim", "--interpolation", "3")
     assert code == 0 and "PreciseIntegration(squarings=20, interpolation=3, corrections=1)" in out
+
+
+# ---------------------------------------------------------------- laws with memory on the command line
+
+def test_run_collapse_scene_says_which_effect_and_exits_0(capsys, tmp_path):
+    """building_collapse: a collapse is the model's answer, not a failure of the run: status collapsed,
+    a warning naming the storey, exit status 0, the recorded storey (the scene's record list) in the
+    summary and in --out."""
+    out_file = tmp_path / "c.npz"
+    code, out, err = run_cli(capsys, "run", "building_collapse", "--scheme", "newmark", "--out", out_file)
+    assert code == 0, err
+    s = summary(out)
+    assert s["status"] == "collapsed"
+    assert re.match(r"collapsed at t = 10\.2\d* \(step \d+\): storey1 \(imk_peak_oriented\) lost its strength",
+                    s["warning"]), s["warning"]
+    assert s["storey1"].startswith("imk_peak_oriented: peak |d| 0.25")
+    res = nvib.load_result(out_file)
+    assert res.status == nvib.Status.collapsed and list(res.effects) == ["storey1"]
+    assert res.effects["storey1"].state["failed"][-1] == 1.0
+
+
+def test_run_record_effect_and_collapse_deformation(capsys, tmp_path):
+    out_file = tmp_path / "b.csv"
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--scheme", "newmark", "--t-end", "12",
+                             "--record-effect", "storey2", "pdelta2", "--collapse-deformation", "0.05", "--out",
+                             out_file)
+    assert code == 0, err
+    s = summary(out)
+    assert s["status"] == "collapsed"
+    assert "storey1 (bilinear) deformed to" in s["warning"] and "beyond the collapse limit 0.05" in s["warning"]
+    assert s["storey2"].startswith("bilinear: peak |d|") and "dissipated" in s["storey2"]
+    assert s["pdelta2"].startswith("p_delta: peak |d|")
+    head = out_file.read_text().splitlines()[0].split(",")
+    assert {"effect:storey2:force", "effect:storey2:plastic_deformation", "effect:pdelta2:force"} <= set(head)
+
+
+def test_run_measure_draws_the_loop(capsys, tmp_path):
+    png = tmp_path / "loop.png"
+    code, out, err = run_cli(capsys, "run", "isolated", "--scheme", "newmark", "--t-end", "5", "--measure",
+                             "bearings", "--plot", png)
+    assert code == 0, err
+    assert png.read_bytes()[:8] == PNG_SIGNATURE
+    assert summary(out)["bearings"].startswith("bouc_wen: peak |d|")
+
+
+@pytest.mark.parametrize("argv, flag, match", [
+    (["--record-effect", "storey9"], "--record-effect", "no effect named 'storey9'"),
+    (["--collapse-deformation", "-1"], "--collapse-deformation", ""),
+])
+def test_run_bad_memory_options(capsys, argv, flag, match):
+    code, _, err = run_cli(capsys, "run", "building_inelastic", "--t-end", "0.1", *argv)
+    assert code == 2 and flag in err and match in err
