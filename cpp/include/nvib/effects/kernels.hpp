@@ -57,16 +57,23 @@ struct Group {
   const typename L::Params& params_of(std::size_t k) const {
     return static_cast<const typename L::Params*>(params)[uniform ? 0 : k];
   }
+  // Effect k's state in a state buffer (an array of doubles; the law's State is a struct of doubles
+  // with nothing else in it, state_width()). Read and written in place, field by field: a copy
+  // through memcpy kept the state in memory on the stack, which cost a tenth of a step of the
+  // inelastic building.
   template <class L>
-  typename L::State state_of(const double* buffer, std::size_t k) const {
-    typename L::State s{};
-    if constexpr (law::has_state<L>) std::memcpy(&s, buffer + state + k * law::state_width<L>(), sizeof s);
-    (void)buffer, (void)k;
-    return s;
+  decltype(auto) state_of(const double* buffer, std::size_t k) const {
+    if constexpr (law::has_state<L>) {
+      return static_cast<const typename L::State&>(
+          *reinterpret_cast<const typename L::State*>(buffer + state + k * law::state_width<L>()));
+    } else {
+      (void)buffer, (void)k;
+      return NoState{};
+    }
   }
   template <class L>
   void store_state(double* buffer, std::size_t k, const typename L::State& s) const {
-    if constexpr (law::has_state<L>) std::memcpy(buffer + state + k * law::state_width<L>(), &s, sizeof s);
+    if constexpr (law::has_state<L>) *reinterpret_cast<typename L::State*>(buffer + state + k * law::state_width<L>()) = s;
     (void)buffer, (void)k, (void)s;
   }
   // g . x for effect k, the storage known at compile time.
@@ -130,14 +137,16 @@ inline void measures_of(const Group& g, std::size_t k, const double* u, const do
   dd = L::uses_velocity ? g.measure_of<S>(k, v) : 0.0;
 }
 
-// The force of effect k (parameters p) from its committed state; with memory its trial state goes
-// to `trial`.
-template <class L>
-inline double respond(const Group& g, std::size_t k, const typename L::Params& p, double d, double dd, double t,
-                      const double* committed, double* trial) {
+// The force of an effect (parameters p) from its committed state at `committed`; with memory and
+// Trial, its trial state goes to `trial` (both point at this effect's state).
+template <class L, bool Trial>
+inline double respond(const typename L::Params& p, double d, double dd, double t, const double* committed,
+                      double* trial) {
   if constexpr (law::has_state<L>) {
-    const auto r = L::trial(p, g.state_of<L>(committed, k), d, dd, t);
-    if (trial) g.store_state<L>(trial, k, r.state);
+    using State = typename L::State;  // read and written in place, as Group::state_of() and store_state()
+    const auto r = L::trial(p, *reinterpret_cast<const State*>(committed), d, dd, t);
+    if constexpr (Trial) *reinterpret_cast<State*>(trial) = r.state;
+    (void)trial;
     return r.f;
   } else {
     (void)committed, (void)trial;
@@ -187,33 +196,45 @@ void add_forces(const Group& g, const double* u, const double* v, double t, doub
     const double* __restrict up = u;
     const double* __restrict vp = v;
     double* __restrict op = out;
-    for (std::size_t k = 0; k < size; ++k) {
-      const auto& p = P[Uniform ? 0 : k];
-      double d = 0.0, dd = 0.0;
-      if constexpr (S == ground || S == pair || S == mixed) {
-        const std::int32_t i = gi[k], j = S == ground ? -1 : gj[k];
-        const bool paired = S == pair || (S == mixed && j >= 0);
-        if constexpr (L::uses_displacement) d = paired ? up[i] - up[j] : up[i] - 0.0;
-        if constexpr (L::uses_velocity) dd = paired ? vp[i] - vp[j] : vp[i] - 0.0;
-        const double f = respond<L>(g, k, p, d, dd, t, committed, trial);
-        op[i] += f;
-        if (paired) op[j] -= f;
-      } else {
-        measures_of<L, S>(g, k, up, vp, d, dd);
-        const double f = respond<L>(g, k, p, d, dd, t, committed, trial);
-        if constexpr (S == two) {
-          if constexpr (std::is_same_v<L, HertzContact>)
-            if (f == 0.0) continue;  // an open contact adds nothing
-          op[gi[k]] += g.c[2 * k] * f;
-          op[gj[k]] += g.c[2 * k + 1] * f;
-        } else if constexpr (S == dense) {
-          const double* w = g.rows + static_cast<Index>(k) * g.n;
-          for (Index q = 0; q < g.n; ++q) op[q] += w[q] * f;
+    // This group's states (nothing to offset for a law without memory); one loop with trial states
+    // written, one without, so that no effect tests for them.
+    constexpr std::size_t W = law::state_width<L>();
+    const double* __restrict cs = W > 0 && committed ? committed + g.state : committed;
+    double* __restrict ts = W > 0 && trial ? trial + g.state : nullptr;
+    auto loop = [&](auto with_trial) {
+      constexpr bool T = decltype(with_trial)::value;
+      for (std::size_t k = 0; k < size; ++k) {
+        const auto& p = P[Uniform ? 0 : k];
+        double d = 0.0, dd = 0.0;
+        if constexpr (S == ground || S == pair || S == mixed) {
+          const std::int32_t i = gi[k], j = S == ground ? -1 : gj[k];
+          const bool paired = S == pair || (S == mixed && j >= 0);
+          if constexpr (L::uses_displacement) d = paired ? up[i] - up[j] : up[i] - 0.0;
+          if constexpr (L::uses_velocity) dd = paired ? vp[i] - vp[j] : vp[i] - 0.0;
+          const double f = respond<L, T>(p, d, dd, t, cs + k * W, T ? ts + k * W : nullptr);
+          op[i] += f;
+          if (paired) op[j] -= f;
         } else {
-          for (std::int32_t e = g.first[k]; e < g.first[k + 1]; ++e) op[g.idx[e]] += g.coef[e] * f;
+          measures_of<L, S>(g, k, up, vp, d, dd);
+          const double f = respond<L, T>(p, d, dd, t, cs + k * W, T ? ts + k * W : nullptr);
+          if constexpr (S == two) {
+            if constexpr (std::is_same_v<L, HertzContact>)
+              if (f == 0.0) continue;  // an open contact adds nothing
+            op[gi[k]] += g.c[2 * k] * f;
+            op[gj[k]] += g.c[2 * k + 1] * f;
+          } else if constexpr (S == dense) {
+            const double* w = g.rows + static_cast<Index>(k) * g.n;
+            for (Index q = 0; q < g.n; ++q) op[q] += w[q] * f;
+          } else {
+            for (std::int32_t e = g.first[k]; e < g.first[k + 1]; ++e) op[g.idx[e]] += g.coef[e] * f;
+          }
         }
       }
-    }
+    };
+    if (W > 0 && ts)
+      loop(std::true_type{});
+    else
+      loop(std::false_type{});
   }
 }
 

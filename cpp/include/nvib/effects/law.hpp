@@ -100,7 +100,8 @@ constexpr bool has_state = !std::is_empty_v<typename L::State>;
 template <class L>
 constexpr std::size_t state_width() {
   if constexpr (has_state<L>) {
-    static_assert(std::is_trivially_copyable_v<typename L::State> && sizeof(typename L::State) % sizeof(double) == 0,
+    static_assert(std::is_trivially_copyable_v<typename L::State> && std::is_standard_layout_v<typename L::State> &&
+                      sizeof(typename L::State) % sizeof(double) == 0 && alignof(typename L::State) == alignof(double),
                   "a law's State is a struct of doubles");
     static_assert(L::state_names.size() == sizeof(typename L::State) / sizeof(double),
                   "state_names names every internal variable");

@@ -20,7 +20,7 @@ struct Bilinear : LawBase {
                                                         {"fy", kRequired, "yield force"},
                                                         {"b", 0.0, "post-yield stiffness ratio, 0 <= b < 1"}}};
   struct Params {
-    double k, fy, H;
+    double k, fy, H, kt;  // kt = k H / (k + H) = b k: the slope while yielding
   };
   struct State {
     double dp;          // slip of the slider (plastic deformation)
@@ -34,21 +34,30 @@ struct Bilinear : LawBase {
     NVIB_CHECK(x[1] > 0.0, "fy", "must be > 0, got " + detail::fmt(x[1]));
     NVIB_CHECK(x[2] >= 0.0 && x[2] < 1.0, "b", "needs 0 <= b < 1 (b = 1 is a linear spring), got " + detail::fmt(x[2]));
   }
-  static Params prepare(const double* x, const Signal*) { return {x[0], x[1], x[2] * x[0] / (1.0 - x[2])}; }
+  static Params prepare(const double* x, const Signal*) {
+    const double k = x[0], H = x[2] * x[0] / (1.0 - x[2]);
+    return {k, x[1], H, k * H / (k + H)};
+  }
 
   // Elastic trial, then the closest-point return to |f - H dp| <= fy (exact for one increment). At the
   // committed deformation itself, on the yield surface (where a step that yielded ends), the slope is the
   // loading one, b k: the tangent a step that goes on loading sees, as OpenSees' Steel01 returns its
   // committed tangent there.
   static Trial<State> trial(const Params& p, const State& c, double d, double, double) {
-    const double f_trial = p.k * (d - c.dp);
-    const double xi = f_trial - p.H * c.dp;          // the force on the slider
-    const double excess = std::abs(xi) - p.fy, kt = p.k * p.H / (p.k + p.H);
-    if (d == c.d) return {f_trial, excess >= -1e-9 * p.fy ? kt : p.k, 0.0, c};
-    if (excess <= 0.0) return {f_trial, p.k, 0.0, {c.dp, c.dissipated, d}};
-    const double slip = excess / (p.k + p.H);        // |increment of dp|
-    const double s = xi > 0.0 ? 1.0 : -1.0;
-    return {f_trial - p.k * slip * s, kt, 0.0, {c.dp + s * slip, c.dissipated + p.fy * slip, d}};
+    Trial<State> r{p.k * (d - c.dp), p.k, 0.0, {c.dp, c.dissipated, d}};  // the elastic trial
+    const double xi = r.f - p.H * c.dp;  // the force on the slider
+    const double excess = std::abs(xi) - p.fy;
+    if (d == c.d) {
+      if (excess >= -1e-9 * p.fy) r.kd = p.kt;
+    } else if (excess > 0.0) {
+      const double slip = excess / (p.k + p.H);  // |increment of dp|
+      const double s = xi > 0.0 ? 1.0 : -1.0;
+      r.f -= p.k * slip * s;
+      r.kd = p.kt;
+      r.state.dp += s * slip;
+      r.state.dissipated += p.fy * slip;
+    }
+    return r;
   }
   // The spring's energy and the back spring's (given back by a reversed slip).
   static double recoverable(const Params& p, const State& s, double d) {
