@@ -1,10 +1,16 @@
 // Sparse models: the sparse linear solvers (LDL^T for symmetric iteration
 // matrices, LU otherwise) give the dense LU's trajectories to round-off, a
 // sparse consistent mass gives its dense equivalent's, and the automatic
-// choice picks what it says.
+// choice picks what it says. K u + C v (LinearProduct) takes its band form
+// exactly where K and C are complete bands of half-width <= 2, and gives the
+// compressed rows' sums bit for bit either way.
 #include <nvib/nvib.hpp>
 
+#include <algorithm>
+#include <cstring>
+#include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "check.hpp"
@@ -60,9 +66,74 @@ void same_with_both_solvers(const char* what, const ModelT& model, Scheme dense,
   CHECK(du <= tol && dv <= tol && da <= 100 * tol);
 }
 
+// A random matrix with the entries (i, j), |i - j| <= B (B < 0: none), minus those `holes` names.
+SparseMatrix band_matrix(Index n, int B, std::mt19937& gen, const std::vector<std::pair<Index, Index>>& holes = {}) {
+  std::uniform_real_distribution<double> value(-2.0, 2.0);
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (Index i = 0; i < n; ++i)
+    for (Index j = std::max<Index>(0, i - B); j <= std::min<Index>(n - 1, i + B); ++j)
+      if (std::find(holes.begin(), holes.end(), std::make_pair(i, j)) == holes.end())
+        t.emplace_back(static_cast<int>(i), static_cast<int>(j), value(gen));
+  SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  return A;
+}
+
+// out0 + K u + C v row by row, K's stored entries then C's, columns ascending: the order both ways of
+// LinearProduct promise.
+Vector rows_reference(const SparseMatrix& K, const SparseMatrix& C, const Vector& u, const Vector& v,
+                      const Vector& out0) {
+  const Eigen::SparseMatrix<double, Eigen::RowMajor, int> Kr = K, Cr = C;
+  Vector out = out0;
+  for (Index i = 0; i < out.size(); ++i) {
+    double s = out[i];
+    for (decltype(Kr)::InnerIterator it(Kr, i); it; ++it) s += it.value() * u[it.col()];
+    for (decltype(Cr)::InnerIterator it(Cr, i); it; ++it) s += it.value() * v[it.col()];
+    out[i] = s;
+  }
+  return out;
+}
+
+bool bitwise_equal(const Vector& a, const Vector& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+void linear_product_cases() {
+  std::mt19937 gen(2718);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  int banded = 0, general = 0;
+  for (Index n : {1, 2, 3, 4, 5, 6, 7, 9, 40}) {
+    Vector u(n), v(n), out0(n);
+    for (Index i = 0; i < n; ++i) u[i] = normal(gen), v[i] = normal(gen), out0[i] = normal(gen);
+    auto check = [&](const SparseMatrix& K, const SparseMatrix& C, bool expect_band) {
+      const nvib::LinearProduct p(K, C);
+      CHECK(p.banded() == expect_band);
+      Vector out = out0;
+      p.add(u.data(), v.data(), out.data());
+      CHECK(bitwise_equal(out, rows_reference(K, C, u, v, out0)));
+      (expect_band ? banded : general) += 1;
+    };
+    for (int bk = -1; bk <= 2; ++bk)
+      for (int bc = -1; bc <= 2; ++bc) {
+        if (bk < 0 && bc < 0) continue;
+        const SparseMatrix K = bk < 0 ? SparseMatrix(n, n) : band_matrix(n, bk, gen);
+        const SparseMatrix C = bc < 0 ? SparseMatrix(n, n) : band_matrix(n, bc, gen);
+        check(K, C, true);
+      }
+    if (n >= 2) {  // an entry missing from the band: the compressed rows
+      check(band_matrix(n, 1, gen, {{0, 1}}), band_matrix(n, 1, gen), false);
+      check(band_matrix(n, 1, gen), band_matrix(n, 2, gen, {{n - 1, n - 2}}), false);
+    }
+    if (n >= 4) check(band_matrix(n, 3, gen), SparseMatrix(n, n), false);  // wider than 2
+  }
+  std::printf("LinearProduct: %d band cases and %d general ones, bit for bit with the rows\n", banded, general);
+}
+
 }  // namespace
 
 int main() {
+  linear_product_cases();
   using LS = nvib::LinearSolverChoice;
   using Mode = nvib::NewtonMode;
   const Index n = 120;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "../base/types.hpp"
+#include "linear_product.hpp"
 #include "mass.hpp"
 
 namespace nvib {
@@ -153,10 +154,7 @@ class Model {
     has_C_ = check_linear_part(C, "C", n);
     lin->K = std::move(K);
     lin->C = std::move(C);
-    lin->Kr = lin->K;
-    lin->Cr = lin->C;
-    lin->Kr.makeCompressed();
-    lin->Cr.makeCompressed();
+    lin->product = LinearProduct(has_K_ ? lin->K : SparseMatrix(n, n), has_C_ ? lin->C : SparseMatrix(n, n));
     lin_ = std::move(lin);
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
@@ -340,22 +338,8 @@ class Model {
       f_(u, v, t, out);
     if (has_K_ || has_C_) add_linear(u.data(), v.data(), out.data());
   }
-  // out += K u + C v in one pass by rows (their row-major copies), each row's terms in the order of a
-  // product by columns: K's, then C's, columns ascending.
-  void add_linear(const double* __restrict u, const double* __restrict v, double* __restrict out) const {
-    const RowMatrix &K = lin_->Kr, &C = lin_->Cr;
-    const int *ko = K.outerIndexPtr(), *ki = K.innerIndexPtr(), *co = C.outerIndexPtr(), *ci = C.innerIndexPtr();
-    const double *kv = K.valuePtr(), *cv = C.valuePtr();
-    const bool k = has_K_, c = has_C_;
-    for (Index i = 0, n = size(); i < n; ++i) {
-      double s = out[i];
-      if (k)
-        for (int q = ko[i], e = ko[i + 1]; q < e; ++q) s += kv[q] * u[ki[q]];
-      if (c)
-        for (int q = co[i], e = co[i + 1]; q < e; ++q) s += cv[q] * v[ci[q]];
-      out[i] = s;
-    }
-  }
+  // out += K u + C v in one pass by rows (linear_product.hpp).
+  void add_linear(const double* u, const double* v, double* out) const { lin_->product.add(u, v, out); }
 
   // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
   // a second-order difference); velocity columns only if f uses velocity.
@@ -404,10 +388,9 @@ class Model {
 
   Mass mass_;
   // The linear parts, never changed after construction: shared by the copies of the model.
-  using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
   struct Linear {
     SparseMatrix K, C;
-    RowMatrix Kr, Cr;  // the same by rows, for the force
+    LinearProduct product;  // out += K u + C v, for the force
   };
   // out += |A| |x| (no stored |A|: it is only needed for round-off estimates)
   static void add_abs_product(const SparseMatrix& A, const CVecRef& x, VecRef out) {
