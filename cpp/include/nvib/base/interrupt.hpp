@@ -14,6 +14,8 @@
 #include <chrono>
 #include <cstdint>
 
+#include "compiler.hpp"
+
 namespace nvib {
 
 struct InterruptHook {
@@ -60,10 +62,7 @@ class ClockPoll {
   }
 
  private:
-#if defined(__GNUC__)
-  __attribute__((noinline))
-#endif
-  bool read_clock() {
+  NVIB_NOINLINE bool read_clock() {
     const auto now = clock::now();
     const auto since = now - last_read_;
     if (since < std::chrono::microseconds(500) && stride_ < (std::int64_t(1) << 24))

@@ -3,6 +3,8 @@
 
 #include <Eigen/Core>
 
+#include "compiler.hpp"
+
 namespace nvib {
 
 namespace detail {
@@ -14,11 +16,6 @@ inline bool finite(double x) { return std::isfinite(x); }
 // Same operations in the same order either way.
 // flatten: the body is inlined into each loop (left to itself, the inliner gives up on a body used
 // in nine loops and calls it entry by entry).
-#if defined(__GNUC__)
-#define NVIB_FLATTEN __attribute__((flatten))
-#else
-#define NVIB_FLATTEN
-#endif
 template <int N, class F>
 NVIB_FLATTEN inline void unrolled(F& body) {
   for (Eigen::Index i = 0; i < N; ++i) body(i);
