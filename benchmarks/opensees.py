@@ -1,5 +1,9 @@
 """nvib and OpenSees side by side on the building scene: same model, same schemes, same steps.
 
+The laws with memory (ElasticPP, Steel01, BoucWen, IMK peak-oriented on a zeroLength SDOF and on
+the six-storey building) are compared in benchmarks/opensees_hysteresis.py; ``--hysteresis`` here
+runs that comparison with the arguments that follow it.
+
 The model. nvib.load_scene("building") (python/nvib/scenes/building.toml): six
 floors of 1e5 kg on one axis, storey i a hardening spring between floors i-1
 and i (floor 0 the ground) with f = k0 d + k0 a d^3 on the drift d
@@ -757,9 +761,16 @@ def opensees_only_main(argv=None, default_test: str = "dispincr",
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["--hysteresis"]:
+        sys.path.insert(0, HERE)
+        import opensees_hysteresis
+        return opensees_hysteresis.main(argv[1:])
     if "--opensees-only" in argv:
         return opensees_only_main(argv)
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--hysteresis", action="store_true",
+                   help="as the first argument: the laws with memory against OpenSees' uniaxial materials "
+                        "(benchmarks/opensees_hysteresis.py), with the arguments that follow")
     p.add_argument("--dts", type=float, nargs="+", default=list(DEFAULT_DTS))
     p.add_argument("--t-end", type=float, default=10.0)
     p.add_argument("--repeats", type=int, default=3)
