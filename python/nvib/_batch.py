@@ -15,6 +15,9 @@ import dataclasses
 import itertools
 import math
 import os
+import signal
+import sys
+import time
 
 import numpy as np
 
@@ -23,6 +26,7 @@ from ._labels import scheme_label
 from ._model import Model
 from ._progress import ProgressBar
 from ._records import GroundMotion
+from ._core import StopToken
 from ._solve import Status, solve
 
 __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
@@ -76,8 +80,8 @@ class Batch(list):
 
     @property
     def failed(self) -> list[int]:
-        """Indices of the runs that did not succeed."""
-        return [k for k, r in enumerate(self) if not r.success]
+        """Indices of the runs that did not succeed (None: a run an interrupt kept from starting)."""
+        return [k for k, r in enumerate(self) if r is None or not r.success]
 
     def __reduce__(self):
         return (Batch, (list(self), self.labels))
@@ -208,8 +212,96 @@ def _run_one(model, motion, scale, changes, label, scheme, keep, options):
         return RunError(label, exc)
 
 
-def _run_chunk(items, keep, options):
-    return [_run_one(*item, keep, options) for item in items]
+def _partial(item, keep, options, exc: BaseException):
+    """What an interrupted run hands back: its partial Result (Status.interrupted), summarised for
+    keep="peaks"; None when it stopped before its first step."""
+    res = getattr(exc, "result", None)
+    if res is None or keep != "peaks":
+        return res
+    return _summary(item[0], res, item[4])
+
+
+def _run_chunk(items, keep, options, stop=None):
+    """The runs of one chunk in turn, each under ``stop`` (a StopToken) when given. Once the token is
+    set, or a run is interrupted, the rest are not started (None); an interrupted run's partial result
+    takes its place, so the chunk always returns one entry per run."""
+    token = stop if stop is not None else _PROCESS_STOP
+    out = []
+    for item in items:
+        if token is not None and token.is_set:
+            out.append(None)
+            continue
+        try:
+            if token is not None:
+                with token:
+                    out.append(_run_one(*item, keep, options))
+            else:
+                out.append(_run_one(*item, keep, options))
+        except KeyboardInterrupt as exc:
+            out.append(_partial(item, keep, options, exc))
+            if token is not None:
+                token.set()
+            else:
+                raise
+    return out
+
+
+# ---- worker processes -------------------------------------------------------------------------------
+
+_PROCESS_STOP = None  # a worker process's StopToken, set by its SIGINT handler
+
+
+def _on_sigint_in_worker(signum, frame):
+    # the running solve sees the token at its next poll and stops with its partial result; no run starts
+    # after it. Raising here instead could land outside a run and kill the worker between tasks.
+    if _PROCESS_STOP is not None:
+        _PROCESS_STOP.set()
+
+
+def _init_worker():
+    """A batch's worker process: dies with its parent (Linux), and turns SIGINT into a stop request."""
+    global _PROCESS_STOP
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG: killed when the parent dies
+        except (OSError, AttributeError):  # pragma: no cover - no prctl
+            pass
+        if os.getppid() == 1:  # the parent died before the request took effect
+            os._exit(1)
+    _PROCESS_STOP = StopToken()
+    signal.signal(signal.SIGINT, _on_sigint_in_worker)
+
+
+def _stop_workers(pool) -> None:
+    """Ask each worker process of ``pool`` to stop its run (their SIGINT handler)."""
+    for proc in list(getattr(pool, "_processes", {}).values()):
+        try:
+            os.kill(proc.pid, signal.SIGINT)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+
+def _kill_workers(pool) -> None:
+    for proc in list(getattr(pool, "_processes", {}).values()):
+        try:
+            proc.kill()
+        except (ProcessLookupError, PermissionError, AttributeError):
+            pass
+
+
+def _interrupted(results, labels, exc: BaseException) -> KeyboardInterrupt:
+    """The KeyboardInterrupt solve_many raises: ``.result`` is the Batch of what was done (finished runs,
+    the partial ones with Status.interrupted, None for the runs never started)."""
+    batch = Batch(results, labels)
+    finished = sum(1 for r in batch if r is not None and getattr(r, "status", None) != Status.interrupted)
+    partial = sum(1 for r in batch if r is not None and getattr(r, "status", None) == Status.interrupted)
+    err = KeyboardInterrupt(f"solve_many interrupted: {finished} of {len(batch)} runs finished, {partial} "
+                            f"stopped part-way, {len(batch) - finished - partial} not run (exc.result holds them)")
+    err.result = batch
+    return err
 
 
 # ---- the call ----------------------------------------------------------------------------------------
@@ -249,39 +341,139 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     results = [None] * len(items)
     try:
         if client is not None:
-            results = _on_dask(client, items, keep, options, bar)
+            _on_dask(client, items, keep, options, bar, results, labels)
         elif workers == 1 and not processes:
-            for k, item in enumerate(items):
-                results[k] = _run_one(*item, keep, options)
-                bar(k + 1, len(items))
+            _serially(items, keep, options, bar, results, labels)
         else:
             use_processes = processes if processes is not None else uses_python
-            pool_type = cf.ProcessPoolExecutor if use_processes else cf.ThreadPoolExecutor
-            # chunks: a few per worker, so that the pool's per-task cost is spread and the load balances
-            size = max(1, math.ceil(len(items) / (4 * workers)))
-            chunks = [list(range(k, min(k + size, len(items)))) for k in range(0, len(items), size)]
-            done = 0
-            with pool_type(max_workers=workers) as pool:
-                futures = {pool.submit(_run_chunk, [items[k] for k in chunk], keep, options): chunk
-                           for chunk in chunks}
-                for fut in cf.as_completed(futures):
-                    for k, r in zip(futures[fut], fut.result()):
-                        results[k] = r
-                    done += len(futures[fut])
-                    bar(done, len(items))
+            _on_pool(use_processes, workers, items, keep, options, bar, results, labels)
     finally:
         bar.close()
     return Batch(results, labels)
 
 
-def _on_dask(client, items, keep, options, bar):
+def _serially(items, keep, options, bar, results, labels):
+    for k, item in enumerate(items):
+        try:
+            results[k] = _run_one(*item, keep, options)
+        except KeyboardInterrupt as exc:
+            results[k] = _partial(item, keep, options, exc)
+            raise _interrupted(results, labels, exc) from None
+        bar(k + 1, len(items))
+
+
+def _on_pool(use_processes, workers, items, keep, options, bar, results, labels):
+    """Chunks of runs on a pool of threads or processes. On Ctrl-C (KeyboardInterrupt in this thread) the
+    running runs are told to stop (a StopToken for threads; SIGINT, which the workers turn into their
+    token, for processes), the chunks not started are cancelled, and what was done is handed back."""
+    # chunks: a few per worker, so that the pool's per-task cost is spread and the load balances
+    size = max(1, math.ceil(len(items) / (4 * workers)))
+    chunks = [list(range(k, min(k + size, len(items)))) for k in range(0, len(items), size)]
+    stop = None if use_processes else StopToken()
+    if use_processes:
+        pool = cf.ProcessPoolExecutor(max_workers=workers, initializer=_init_worker)
+    else:
+        pool = cf.ThreadPoolExecutor(max_workers=workers)
+    futures = {}
+    done = 0
+
+    def take(fut):
+        nonlocal done
+        for k, r in zip(futures[fut], fut.result()):
+            results[k] = r
+        done += len(futures[fut])
+
+    try:
+        for chunk in chunks:
+            futures[pool.submit(_run_chunk, [items[k] for k in chunk], keep, options, stop)] = chunk
+        for fut in cf.as_completed(futures):
+            take(fut)
+            bar(done, len(items))
+    except KeyboardInterrupt as exc:
+        if stop is not None:
+            stop.set()
+        for fut in futures:
+            fut.cancel()
+        if use_processes:
+            _stop_workers(pool)
+        finished, _ = cf.wait([f for f in futures if not f.cancelled()], timeout=_STOP_WAIT)
+        for fut in finished:
+            if fut.exception() is None:
+                take(fut)
+        raise _interrupted(results, labels, exc) from None
+    except BaseException:
+        if use_processes:  # no worker survives the call: one that did not stop in _STOP_WAIT is killed
+            pool.shutdown(wait=False, cancel_futures=True)
+            _kill_workers(pool)
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+_STOP_WAIT = 5.0  # s: how long the runs told to stop have to hand back their partial results
+
+
+def _run_chunk_dask(items, keep, options, event_name):
+    """A chunk on a Dask worker: its runs under a StopToken that a watcher thread sets when the client
+    sets the Dask Event ``event_name`` (the client's Ctrl-C: Dask does not stop a running task)."""
+    import threading
+
+    from distributed import Event
+
+    event = Event(event_name)  # here, in the task's thread, where the worker's client is found
+    if event.is_set():
+        return [None] * len(items)
+    stop = StopToken()
+    ended = threading.Event()
+
+    def watch():
+        while not ended.is_set():
+            try:
+                if event.wait(timeout=0.2):
+                    stop.set()
+                    return
+            except Exception:  # the scheduler went away: nobody is left to ask for a stop
+                return
+
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
+    try:
+        return _run_chunk(items, keep, options, stop)
+    finally:
+        ended.set()
+        watcher.join()
+
+
+def _on_dask(client, items, keep, options, bar, results, labels):
     """Chunks of runs as Dask tasks (their models pickled), gathered in input order."""
+    import uuid
+
+    from distributed import Event
+
     workers = max(1, len(client.scheduler_info().get("workers", {})) or 1)
     size = max(1, math.ceil(len(items) / (4 * workers)))
-    chunks = [items[k:k + size] for k in range(0, len(items), size)]
-    futures = client.map(_run_chunk, chunks, keep=keep, options=options, pure=False)
-    out = []
-    for k, fut in enumerate(futures):
-        out.extend(fut.result())
-        bar(min((k + 1) * size, len(items)), len(items))
-    return out
+    starts = list(range(0, len(items), size))
+    event_name = f"nvib-stop-{uuid.uuid4().hex}"
+    futures = client.map(_run_chunk_dask, [items[k:k + size] for k in starts], keep=keep, options=options,
+                         event_name=event_name, pure=False)
+    pending = dict(zip(futures, starts))
+    try:
+        for fut in futures:
+            part = fut.result()
+            for j, r in enumerate(part):
+                results[pending[fut] + j] = r
+            bar(pending.pop(fut) + len(part), len(items))
+    except KeyboardInterrupt as exc:
+        # every chunk returns soon once the event is set: the runs under way stop at their next poll and
+        # hand back their partial results, the chunks not started return at once
+        Event(event_name, client=client).set()
+        deadline = time.monotonic() + _STOP_WAIT
+        for fut, start in list(pending.items()):
+            try:
+                part = fut.result(timeout=max(0.01, deadline - time.monotonic()))
+            except Exception:  # not back in time, or failed: those runs are not handed back
+                fut.cancel()
+                continue
+            for j, r in enumerate(part):
+                results[start + j] = r
+        raise _interrupted(results, labels, exc) from None

@@ -5,7 +5,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <atomic>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <nvib/nvib.hpp>
 
@@ -32,13 +35,38 @@ inline void set_argument_error(const char* type_name, const std::string& argumen
   throw py::error_already_set();
 }
 
+// A request to stop, shared by the runs of a batch. Python runs its signal handlers in the main thread
+// only, and PyErr_CheckSignals() does nothing in any other: a run on a worker thread (solve_many on
+// threads, a Dask worker) learns of Ctrl-C through a token the main thread sets. A thread takes a
+// token as its current one for the length of a `with token:` block.
+struct StopToken {
+  std::atomic<bool> requested{false};
+};
+
+inline std::shared_ptr<StopToken>& current_stop_token() {
+  thread_local std::shared_ptr<StopToken> token;
+  return token;
+}
+// The tokens a thread's enclosing `with` blocks made current, restored as the blocks end.
+inline std::vector<std::shared_ptr<StopToken>>& outer_stop_tokens() {
+  thread_local std::vector<std::shared_ptr<StopToken>> stack;
+  return stack;
+}
+
 // Ctrl-C during C++ work: nvib::poll_interrupt() checks Python's signals (taking the GIL if the work
-// released it) and raises KeyboardInterrupt there. Installed for the C++ work of each call.
+// released it) and the thread's stop token, and raises KeyboardInterrupt there. Installed for the C++
+// work of each call.
 struct PythonInterrupt {
   bool gil_released;
   static void poll(void* self) {
     auto check = [] {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      // after the signal handlers: a worker process's handler sets its token (nvib._batch)
+      const std::shared_ptr<StopToken>& token = current_stop_token();
+      if (token && token->requested.load(std::memory_order_relaxed)) {
+        PyErr_SetString(PyExc_KeyboardInterrupt, "the run was stopped: its batch was interrupted");
+        throw py::error_already_set();
+      }
     };
     if (static_cast<PythonInterrupt*>(self)->gil_released) {
       py::gil_scoped_acquire gil;
@@ -76,6 +104,24 @@ inline const char* linear_solver_name(const std::string& s) {
 }
 
 inline void bind_types(py::module_& m) {
+  py::class_<StopToken, std::shared_ptr<StopToken>>(
+      m, "StopToken",
+      "A request to stop shared by runs on several threads: `with token:` makes it the current thread's, "
+      "and a run there raises KeyboardInterrupt at its next poll (about every 50 ms of work) once set.")
+      .def(py::init<>())
+      .def("set", [](StopToken& t) { t.requested.store(true); }, "request every run under this token to stop")
+      .def_property_readonly("is_set", [](const StopToken& t) { return t.requested.load(); })
+      .def("__enter__",
+           [](std::shared_ptr<StopToken> self) {
+             outer_stop_tokens().push_back(current_stop_token());
+             current_stop_token() = self;
+             return self;
+           })
+      .def("__exit__", [](std::shared_ptr<StopToken>, py::object, py::object, py::object) {
+        current_stop_token() = outer_stop_tokens().empty() ? nullptr : outer_stop_tokens().back();
+        if (!outer_stop_tokens().empty()) outer_stop_tokens().pop_back();
+        return false;
+      });
   using nvib::Failure;
   using nvib::Stats;
   using nvib::Status;

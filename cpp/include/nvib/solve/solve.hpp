@@ -11,6 +11,9 @@
 #include <optional>
 #include <type_traits>
 #include <utility>
+#if defined(__GLIBCXX__)
+#include <cxxabi.h>  // abi::__forced_unwind
+#endif
 
 #include "../base/interrupt.hpp"
 #include "../base/memory.hpp"
@@ -239,7 +242,13 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         poll_interrupt();
       }
     }
-  } catch (...) {
+  }
+#if defined(__GLIBCXX__)
+  catch (abi::__forced_unwind&) {
+    throw;  // a thread being ended (pthread_exit, pthread_cancel) must not be kept from ending
+  }
+#endif
+  catch (...) {
     if (!opt.keep_partial) throw;
     finish();
     res.status = Status::interrupted;
