@@ -7,6 +7,7 @@ import os
 import numpy as np
 
 from . import _checks
+from ._solve import ground_a
 
 FORMATS = (".npz", ".csv")
 
@@ -15,7 +16,8 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
     """Writes ``result`` to ``path`` by its extension.
 
     .npz: t, u, v, a, dofs, status, scheme, dt, the stats counters, energy_* columns
-    (if recorded), the recorded effects (``effect_arrays``), the failure message (if any) and the
+    (if recorded), ground_a (under a ground motion: the ground's acceleration at each saved DOF, what
+    ``absolute_a`` adds to a), the recorded effects (``effect_arrays``), the failure message (if any) and the
     ``extra`` entries.
     .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...][,effect:<name>:<field>,...]``
     and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999)."""
@@ -79,6 +81,9 @@ def _write_npz(path: str, result, extra: dict | None) -> None:
         data["failure"] = np.array(result.failure.message)
     data["units"] = np.array(result.units, dtype=str)
     data["relative_to_ground"] = np.array(int(result.relative_to_ground))
+    ground = ground_a(result)
+    if ground is not None:
+        data["ground_a"] = ground
     if result.warnings:
         data["warnings"] = np.array("\n".join(result.warnings))
     for k, val in (extra or {}).items():

@@ -13,6 +13,7 @@ from . import _checks
 from ._core import Failure, Result, Stats, Status
 from ._io import effect_arrays, effect_columns, save_result
 from ._model import rate_unit
+from ._solve import ground_a
 
 __all__ = ["load_result"]
 
@@ -60,9 +61,13 @@ def to_pandas(self):
 
 
 def to_xarray(self):
-    """A Dataset with u, v, a over (time, dof) (and the energy terms over time), the run in ``attrs``."""
+    """A Dataset with u, v, a over (time, dof) (and ground_a, the ground's acceleration, under a ground
+    motion; the energy terms over time), the run in ``attrs``."""
     xr = _need("xarray", "xarray", "Result.to_xarray()")
     data = {q: (("time", "dof"), np.asarray(getattr(self, q))) for q in ("u", "v", "a")}
+    ground = ground_a(self)
+    if ground is not None:  # what absolute_a adds to a
+        data["ground_a"] = (("time", "dof"), ground)
     if self.energy is not None:
         for k, v in self.energy.as_dict().items():
             data[f"energy_{k}"] = (("time",), np.asarray(v))
@@ -99,7 +104,7 @@ def _netcdf_engine() -> str:
         return "scipy"  # netCDF 3, from SciPy
 
 
-def _rebuild(t, u, v, a, energy, dofs, attrs, units, effects=None) -> Result:
+def _rebuild(path, t, u, v, a, energy, dofs, attrs, units, effects=None, ground=None) -> Result:
     stats = Stats.__new__(Stats)
     stats.__setstate__(tuple(int(attrs.get(f"stats_{k}", 0)) for k in _COUNTERS) +
                        (float(attrs.get("stats_wall_time", 0.0)), str(attrs.get("stats_linear_solver", ""))))
@@ -114,7 +119,8 @@ def _rebuild(t, u, v, a, energy, dofs, attrs, units, effects=None) -> Result:
                       str(attrs.get("scheme", "")), float(attrs.get("dt", 0.0)), [str(d) for d in dofs], None,
                       effects or []))
     warnings = str(attrs.get("warnings", ""))
-    res._extras = {"ground": None, "relative_to_ground": bool(int(attrs.get("relative_to_ground", 0))),
+    res._extras = {"ground": None, "ground_a": None if ground is None else np.asarray(ground, float).reshape(-1, m),
+                   "file": path, "relative_to_ground": bool(int(attrs.get("relative_to_ground", 0))),
                    "units": [str(u) for u in units] if units is not None else "m",
                    "warnings": warnings.split("\n") if warnings else []}
     return res
@@ -137,7 +143,9 @@ def _records(get, names) -> list:
 
 def load_result(path) -> Result:
     """A Result read back from .npz or .nc (as ``Result.save`` writes them). Its ``scheme`` is the scheme's
-    repr; histories, DOF names, energy, status, failure message and counters are as saved."""
+    repr; histories, DOF names, energy, status, failure message and counters are as saved, and so is the
+    ground's acceleration ``absolute_a`` adds (a file written before it was saved has none: absolute_a
+    then raises ArgumentError unless a is not relative to the ground)."""
     path = os.fspath(path)
     ext = os.path.splitext(path)[1].lower()
     if ext == ".npz":
@@ -149,8 +157,9 @@ def load_result(path) -> Result:
             attrs.update({f"stats_{k}": z[k].item() for k in (*_COUNTERS, "wall_time", "linear_solver") if k in keys})
             names = list(z["effects_names"]) if "effects_names" in keys else []
             effects = _records(lambda k: z[k], names)
-            return _rebuild(z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs,
-                            list(z["units"]) if "units" in keys else None, effects)
+            return _rebuild(path, z["t"], z["u"], z["v"], z["a"], energy, list(z["dofs"]), attrs,
+                            list(z["units"]) if "units" in keys else None, effects,
+                            z["ground_a"] if "ground_a" in keys else None)
     if ext == ".nc":
         xr = _need("xarray", "xarray", "load_result() of a .nc file")
         with xr.open_dataset(path, engine=_netcdf_engine()) as ds:
@@ -165,9 +174,9 @@ def load_result(path) -> Result:
                 return np.array(attrs[key].split("\n") if key.endswith("_state_names") else attrs[key])
 
             effects = _records(get, names)
-            return _rebuild(ds["time"].values, ds["u"].values, ds["v"].values, ds["a"].values, energy,
+            return _rebuild(path, ds["time"].values, ds["u"].values, ds["v"].values, ds["a"].values, energy,
                             list(ds["dof"].values), attrs, list(ds["unit"].values) if "unit" in ds.coords else None,
-                            effects)
+                            effects, ds["ground_a"].values if "ground_a" in ds else None)
     raise _checks.value_error("path", f"expected a file ending in .npz or .nc, got {path!r}")
 
 

@@ -1,0 +1,90 @@
+"""Files say what they hold: a result saved and read back keeps what absolute_a adds to a (the ground's
+acceleration); a file written before it was saved refuses absolute_a instead of returning a."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+import nvib
+
+FORMATS = (".npz", ".nc")
+
+
+def _format(ext):
+    """The extension, after skipping a .nc test when xarray (the optional extra) is absent."""
+    if ext == ".nc":
+        pytest.importorskip("xarray")
+    return ext
+
+
+def _without(path, key):
+    """Rewrite the file at ``path`` without ``key``, as files were written before ``key`` was saved."""
+    if path.suffix == ".npz":
+        with np.load(path, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files if k != key}
+        with open(path, "wb") as fh:
+            np.savez_compressed(fh, **data)
+    else:
+        import xarray as xr
+
+        with xr.open_dataset(path) as ds:
+            ds = ds.drop_vars(key).load()
+        ds.to_netcdf(path)
+
+
+@pytest.fixture(scope="module")
+def building():
+    """The building scene under its ground acceleration a_g = 10 sin(pi t) on every floor."""
+    return nvib.solve(nvib.load_scene("building"), nvib.Newmark(), dt=0.01, t_end=1.0)
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_absolute_a_survives_a_file(building, ext, tmp_path):
+    path = tmp_path / f"b{_format(ext)}"
+    assert building.relative_to_ground
+    ground = 10.0 * np.sin(np.pi * building.t)
+    np.testing.assert_allclose(building.absolute_a - building.a, np.outer(ground, np.ones(6)), rtol=0, atol=1e-14)
+    building.save(path)
+    back = nvib.load_result(path)
+    assert back.relative_to_ground
+    np.testing.assert_array_equal(back.a, building.a)
+    np.testing.assert_allclose(back.absolute_a, building.absolute_a, rtol=0, atol=1e-15)
+    assert np.max(np.abs(back.absolute_a - back.a)) == pytest.approx(10.0, rel=1e-3)  # not a itself
+    np.testing.assert_allclose(pickle.loads(pickle.dumps(back)).absolute_a, building.absolute_a, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_ground_on_some_dofs_and_no_ground_survive_a_file(ext, tmp_path):
+    """The ground acting on one DOF (a measure), saved in another order: each DOF keeps its own share;
+    a model without ground motion reads back with absolute_a = a."""
+    gm = nvib.GroundMotion.from_array([0.0, 1.0, -2.0, 0.5, 0.0], dt=0.01, scale=9.80665)
+    one = nvib.Model([2.0, 3.0], effects=[{"type": "ground_acceleration", "measure": {1: 1.0}, "signal": gm}])
+    res = nvib.solve(one, nvib.CEMDTS(), dt=0.004, t_end=0.04, dofs=[1, 0])
+    res.save(tmp_path / f"one{_format(ext)}")
+    back = nvib.load_result(tmp_path / f"one{ext}")
+    np.testing.assert_allclose(back.absolute_a, res.absolute_a, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(back.absolute_a[:, 1], back.a[:, 1])  # the ground does not act on DOF 0
+    assert np.max(np.abs(back.absolute_a[:, 0] - back.a[:, 0])) > 1.0
+    free = nvib.solve(nvib.load_scene("hardening"), nvib.CentralDifference(), dt=1e-3, t_end=0.01)
+    free.save(tmp_path / f"free{ext}")
+    back = nvib.load_result(tmp_path / f"free{ext}")
+    assert not back.relative_to_ground
+    np.testing.assert_array_equal(back.absolute_a, free.a)
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_a_file_without_the_ground_refuses_absolute_a(building, ext, tmp_path):
+    """A file written before the ground's acceleration was saved still reads (u, v, a relative to the
+    ground), but absolute_a says what the file lacks instead of returning a."""
+    path = tmp_path / f"old{_format(ext)}"
+    building.save(path)
+    _without(path, "ground_a")
+    back = nvib.load_result(path)
+    assert back.relative_to_ground
+    np.testing.assert_array_equal(back.a, building.a)
+    with pytest.raises(nvib.ArgumentError, match=r"ground_a") as exc:
+        back.absolute_a
+    assert str(path) in str(exc.value) and "relative to the ground" in str(exc.value)
+    with pytest.raises(nvib.ArgumentError, match=r"ground_a"):
+        pickle.loads(pickle.dumps(back)).absolute_a
