@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import os
 
 import numpy as np
@@ -20,7 +21,8 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
     ``absolute_a`` adds to a), the recorded effects (``effect_arrays``), the failure message (if any) and the
     ``extra`` entries.
     .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...][,effect:<name>:<field>,...]``
-    and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999)."""
+    and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999); a name
+    holding a comma, double quote or line break is quoted as RFC 4180 says (Python's csv module reads it)."""
     ext = os.path.splitext(str(path))[1].lower()
     if ext == ".npz":
         _write_npz(path, result, extra)
@@ -104,6 +106,9 @@ def _write_csv(path: str, result) -> None:
         head.append(name)
     table = np.hstack(cols) if len(result.t) else np.zeros((0, len(head)))
     with open(path, "w", encoding="utf-8", newline="") as fh:  # shortest decimals that read back exactly
-        fh.write(",".join(head) + "\n")
-        for row in table.tolist():
-            fh.write(",".join(map(repr, row)) + "\n")
+        out = csv.writer(fh, lineterminator="\n")  # a name with a comma, quote or line break is quoted (RFC 4180)
+        # csv quotes a field holding the line terminator, "\n", but not a lone "\r", which readers take for a
+        # line break too: a header with one is quoted throughout
+        (csv.writer(fh, lineterminator="\n", quoting=csv.QUOTE_ALL) if any("\r" in h for h in head) else out
+         ).writerow(head)
+        out.writerows([repr(x) for x in row] for row in table.tolist())

@@ -1,6 +1,8 @@
 """Files say what they hold: a result saved and read back keeps what absolute_a adds to a (the ground's
-acceleration); a file written before it was saved refuses absolute_a instead of returning a."""
+acceleration); a file written before it was saved refuses absolute_a instead of returning a. A CSV header
+is quoted where a name needs it, so any DOF name reads back."""
 
+import csv
 import pickle
 
 import numpy as np
@@ -88,3 +90,42 @@ def test_a_file_without_the_ground_refuses_absolute_a(building, ext, tmp_path):
     assert str(path) in str(exc.value) and "relative to the ground" in str(exc.value)
     with pytest.raises(nvib.ArgumentError, match=r"ground_a"):
         pickle.loads(pickle.dumps(back)).absolute_a
+
+
+ODD_NAMES = ["a,b", 'say "x"', "two\nlines", "cr\rhere", "plain"]
+
+
+def test_csv_quotes_names_so_they_read_back(tmp_path):
+    """DOF and effect names with a comma, double quote or line break are quoted (RFC 4180): csv and
+    pandas read the same names and the same numbers back."""
+    model = nvib.Model([1.0] * 5, dofs=ODD_NAMES, u0=[0.1, 0.0, 0.0, 0.0, 0.2],
+                       effects=[{"type": "spring", "name": 'k,"1"', "measure": {0: 1.0, 4: -1.0}, "k": 4.0}])
+    res = nvib.solve(model, nvib.CEMDTS(), dt=0.1, t_end=0.3, record=['k,"1"'])
+    path = tmp_path / "odd.csv"
+    res.save(path)
+    head = ["t"] + [f"{q}:{d}" for q in ("u", "v", "a") for d in ODD_NAMES]
+    head += [f'effect:k,"1":{field}' for field in ("measure", "rate", "force")]
+    with open(path, encoding="utf-8", newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == head
+    table = np.array(rows[1:], dtype=float)
+    assert table.shape == (len(res.t), len(head))
+    np.testing.assert_array_equal(table[:, 0], res.t)
+    np.testing.assert_array_equal(table[:, 1:6], res.u)
+    np.testing.assert_array_equal(table[:, 11:16], res.a)
+    np.testing.assert_array_equal(table[:, -1], res.effects['k,"1"'].force)
+
+    pd = pytest.importorskip("pandas")
+    df = pd.read_csv(path, dtype=str)  # the decimals as written, parsed by Python's float below
+    assert list(df.columns) == head
+    np.testing.assert_array_equal(np.asarray(df["v:two\nlines"], dtype=float), res.v[:, 2])
+    np.testing.assert_array_equal(np.asarray(df["u:cr\rhere"], dtype=float), res.u[:, 3])
+    np.testing.assert_array_equal(np.asarray(df['effect:k,"1":measure'], dtype=float), res.u[:, 0] - res.u[:, 4])
+
+
+def test_csv_of_plain_names_is_unquoted(tmp_path):
+    res = nvib.solve(nvib.load_scene("building"), nvib.CentralDifference(), dt=1e-3, t_end=0.002)
+    res.save(tmp_path / "b.csv")
+    lines = (tmp_path / "b.csv").read_text(encoding="utf-8").split("\n")
+    assert lines[0] == ",".join(["t"] + [f"{q}:x{k}" for q in "uva" for k in range(1, 7)]) and '"' not in lines[1]
+    assert lines[-1] == "" and len(lines) == 2 + len(res.t)  # one line per row, ended by \n
