@@ -18,8 +18,8 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
 
     .npz: t, u, v, a, dofs, status, scheme, dt, the stats counters, energy_* columns
     (if recorded), ground_a (under a ground motion: the ground's acceleration at each saved DOF, what
-    ``absolute_a`` adds to a), the recorded effects (``effect_arrays``), the failure message (if any) and the
-    ``extra`` entries.
+    ``absolute_a`` adds to a), the recorded effects (``effect_arrays``), the failure (if any:
+    ``failure_fields``) and the ``extra`` entries.
     .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...][,effect:<name>:<field>,...]``
     and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999); a name
     holding a comma, double quote or line break is quoted as RFC 4180 says (Python's csv module reads it)."""
@@ -30,6 +30,16 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
         _write_csv(path, result)
     else:
         raise _checks.value_error("path", f"expected a file ending in {' or '.join(FORMATS)}, got {path!r}")
+
+
+def failure_fields(failure) -> dict:
+    """What a Failure holds beside its status (which the result's status repeats): failure (the message),
+    failure_step, failure_t, failure_dof (-1 if none) and failure_residuals (Newton's, possibly none);
+    nothing when the run did not fail."""
+    if failure is None:
+        return {}
+    return {"failure": failure.message, "failure_step": int(failure.step), "failure_t": float(failure.t),
+            "failure_dof": int(failure.dof), "failure_residuals": [float(x) for x in failure.residuals]}
 
 
 def effect_columns(result):
@@ -79,8 +89,8 @@ def _write_npz(path: str, result, extra: dict | None) -> None:
         for k, val in result.energy.as_dict().items():
             data[f"energy_{k}"] = val
     data.update(effect_arrays(result))
-    if result.failure is not None:
-        data["failure"] = np.array(result.failure.message)
+    for k, val in failure_fields(result.failure).items():
+        data[k] = np.array(val, dtype=float) if k == "failure_residuals" else np.array(val)
     data["units"] = np.array(result.units, dtype=str)
     data["relative_to_ground"] = np.array(int(result.relative_to_ground))
     ground = ground_a(result)

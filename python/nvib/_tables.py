@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _checks
 from ._core import Failure, Result, Stats, Status
-from ._io import effect_arrays, effect_columns, save_result
+from ._io import effect_arrays, effect_columns, failure_fields, save_result
 from ._model import rate_unit
 from ._solve import ground_a
 
@@ -33,8 +33,8 @@ def _attrs(res) -> dict:
     out = {"scheme": repr(res.scheme), "dt": float(res.dt), "status": res.status.name,
            "num_steps_requested": int(res.num_steps_requested),
            "max_residual": float("nan") if res.max_residual is None else float(res.max_residual),
-           "failure": res.failure.message if res.failure is not None else "",
-           "relative_to_ground": int(res.relative_to_ground), "warnings": "\n".join(res.warnings)}
+           "failure": "", "relative_to_ground": int(res.relative_to_ground), "warnings": "\n".join(res.warnings)}
+    out.update(failure_fields(res.failure))
     for k, v in res.stats.as_dict().items():
         out[f"stats_{k}"] = v
     return out
@@ -80,6 +80,10 @@ def to_xarray(self):
     for q, p in (("u", 0), ("v", 1), ("a", 2)):  # per DOF in the unit coordinate; here the rate
         ds[q].attrs["units"] = rate_unit("unit", p)
     ds.attrs.update(_attrs(self))
+    if "failure_residuals" in ds.attrs:  # netCDF takes an array; an empty one is left out
+        residuals = np.asarray(ds.attrs.pop("failure_residuals"), float)
+        if residuals.size:
+            ds.attrs["failure_residuals"] = residuals
     for key, arr in effect_arrays(self).items():
         if not key.endswith(("_measure", "_rate", "_force", "_state")):
             ds.attrs[key] = "\n".join(np.atleast_1d(arr).astype(str).tolist())
@@ -110,7 +114,10 @@ def _rebuild(path, t, u, v, a, energy, dofs, attrs, units, effects=None, ground=
                        (float(attrs.get("stats_wall_time", 0.0)), str(attrs.get("stats_linear_solver", ""))))
     status = Status[str(attrs.get("status", "success"))]
     failure = Failure.__new__(Failure)
-    failure.__setstate__((status, 0, math.nan, -1, [], str(attrs.get("failure", ""))))
+    failure.__setstate__((status, int(attrs.get("failure_step", 0)), float(attrs.get("failure_t", math.nan)),
+                          int(attrs.get("failure_dof", -1)),
+                          [float(x) for x in np.atleast_1d(np.asarray(attrs.get("failure_residuals", []), float))],
+                          str(attrs.get("failure", ""))))
     res = Result.__new__(Result)
     m = len(dofs)
     res.__setstate__((np.asarray(t, float), np.asarray(u, float).reshape(-1, m), np.asarray(v, float).reshape(-1, m),
@@ -143,9 +150,9 @@ def _records(get, names) -> list:
 
 def load_result(path) -> Result:
     """A Result read back from .npz or .nc (as ``Result.save`` writes them). Its ``scheme`` is the scheme's
-    repr; histories, DOF names, energy, status, failure message and counters are as saved, and so is the
-    ground's acceleration ``absolute_a`` adds (a file written before it was saved has none: absolute_a
-    then raises ArgumentError unless a is not relative to the ground)."""
+    repr; histories, DOF names, energy, status, failure (message, time, step, DOF, residuals) and counters are
+    as saved, and so is the ground's acceleration ``absolute_a`` adds (a file written before it was saved has
+    none: absolute_a then raises ArgumentError unless a is not relative to the ground)."""
     path = os.fspath(path)
     ext = os.path.splitext(path)[1].lower()
     if ext == ".npz":
@@ -154,6 +161,8 @@ def load_result(path) -> Result:
             energy = (np.column_stack([z[f"energy_{k}"] if f"energy_{k}" in keys else np.zeros(len(z["t"]))
                                        for k in _ENERGY]) if "energy_kinetic" in keys else np.zeros((0, 0)))
             attrs = {k: z[k].item() for k in keys if z[k].ndim == 0}
+            if "failure_residuals" in keys:
+                attrs["failure_residuals"] = z["failure_residuals"]
             attrs.update({f"stats_{k}": z[k].item() for k in (*_COUNTERS, "wall_time", "linear_solver") if k in keys})
             names = list(z["effects_names"]) if "effects_names" in keys else []
             effects = _records(lambda k: z[k], names)

@@ -1,6 +1,7 @@
 """Files say what they hold: a result saved and read back keeps what absolute_a adds to a (the ground's
 acceleration); a file written before it was saved refuses absolute_a instead of returning a. A CSV header
-is quoted where a name needs it, so any DOF name reads back."""
+is quoted where a name needs it, so any DOF name reads back. A failed run reads back with its failure
+whole: status, message, time, step, DOF and Newton's residuals."""
 
 import csv
 import pickle
@@ -129,3 +130,33 @@ def test_csv_of_plain_names_is_unquoted(tmp_path):
     lines = (tmp_path / "b.csv").read_text(encoding="utf-8").split("\n")
     assert lines[0] == ",".join(["t"] + [f"{q}:x{k}" for q in "uva" for k in range(1, 7)]) and '"' not in lines[1]
     assert lines[-1] == "" and len(lines) == 2 + len(res.t)  # one line per row, ended by \n
+
+
+def _failure(f):
+    return (f.status, f.message, f.t, f.step, f.dof, list(f.residuals))
+
+
+def _hardening_newton_fails():
+    """One Newton iteration with tolerances no step meets: fails at step 1 with two residuals."""
+    model = nvib.Model([1.0], effects=[{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": 100.0, "a": 30.0}],
+                       dofs=["x"], u0=[1.5])
+    return nvib.solve(model, nvib.Newmark(newton=nvib.Newton(mode="newton", max_iter=1, rtol=1e-15, atol=1e-15)),
+                      dt=0.01, t_end=0.1, throw=False)
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_a_failed_run_keeps_its_failure(ext, tmp_path):
+    diverged = nvib.solve(nvib.load_scene("building"), nvib.CentralDifference(), dt=0.05, t_end=5.0, throw=False)
+    newton = _hardening_newton_fails()
+    assert _failure(diverged.failure)[:5] == (nvib.Status.diverged, diverged.failure.message, 0.45, 9, 0)
+    assert newton.failure.status == nvib.Status.newton_failed and len(newton.failure.residuals) == 2
+    for name, res in (("diverged", diverged), ("newton", newton)):
+        path = tmp_path / f"{name}{_format(ext)}"
+        res.save(path)
+        back = nvib.load_result(path)
+        assert back.status == res.status and not back.success
+        assert _failure(back.failure) == _failure(res.failure)
+        np.testing.assert_array_equal(back.u, res.u)
+    ok = tmp_path / f"ok{ext}"
+    nvib.solve(nvib.load_scene("hardening"), nvib.CentralDifference(), dt=1e-3, t_end=0.01).save(ok)
+    assert nvib.load_result(ok).failure is None
