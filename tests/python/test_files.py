@@ -1,9 +1,12 @@
 """Files say what they hold: a result saved and read back keeps what absolute_a adds to a (the ground's
 acceleration); a file written before it was saved refuses absolute_a instead of returning a. A CSV header
 is quoted where a name needs it, so any DOF name reads back. A failed run reads back with its failure
-whole: status, message, time, step, DOF and Newton's residuals."""
+whole: status, message, time, step, DOF and Newton's residuals. A file nvib did not write, or a damaged
+one, is refused with one ArgumentError naming the file and what is wrong; pickles are never loaded."""
 
 import csv
+import io
+import os
 import pickle
 
 import numpy as np
@@ -160,3 +163,90 @@ def test_a_failed_run_keeps_its_failure(ext, tmp_path):
     ok = tmp_path / f"ok{ext}"
     nvib.solve(nvib.load_scene("hardening"), nvib.CentralDifference(), dt=1e-3, t_end=0.01).save(ok)
     assert nvib.load_result(ok).failure is None
+
+
+def _npz_with(good, path, **changes):
+    with np.load(good, allow_pickle=False) as z:
+        data = {k: z[k] for k in z.files}
+    data.update(changes)
+    np.savez(path, **data)
+
+
+def _half(good, path):
+    data = good.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+
+
+def _flipped(good, path):
+    """The file with one byte in its middle changed, as a bad disk or transfer leaves it."""
+    data = bytearray(good.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+def _npy_bytes():
+    buf = io.BytesIO()
+    np.save(buf, np.arange(3.0))
+    return buf.getvalue()
+
+
+# name: (how to write it from a good .npz / .nc and the scratch path, what the message says)
+BAD_FILES = {
+    "empty.npz": (lambda good, p: p.write_bytes(b""), r"is empty \(0 bytes\)"),
+    "text.npz": (lambda good, p: p.write_text("t,u:x\n0.0,1.0\n"), r"is not a \.npz archive \(a zip file\) but text"),
+    "other.npz": (lambda good, p: np.savez(p, x=np.arange(3), y=np.ones(2)),
+                  r"is not a result nvib saved: it has no t, u, v, a, dofs \(it holds x, y\)"),
+    "truncated.npz": (_half, r"is damaged or truncated"),
+    "damaged.npz": (_flipped, r"is damaged or truncated"),
+    "objects.npz": (lambda good, p: np.savez(p, t=np.array([{"t": 0.0}], dtype=object)),
+                    r"holds Python objects in t, which nvib never saves and does not read"),
+    "array.npz": (lambda good, p: p.write_bytes(_npy_bytes()), r"but a NumPy \.npy array"),
+    "pickle.npz": (lambda good, p: p.write_bytes(pickle.dumps({"t": [0.0]})),
+                   r"but a Python pickle, which nvib does not load"),
+    "netcdf.npz": (lambda good, p: p.write_bytes(b"CDF\x01" + bytes(60)),
+                   r"but a netCDF-3 file: .* would end in \.nc"),
+    "shape.npz": (lambda good, p: _npz_with(good, p, u=np.zeros((3, 2))),
+                  r"its u is an array of shape \(3, 2\) and dtype float64, not 11 x 6 numbers"),
+    "strings.npz": (lambda good, p: _npz_with(good, p, t=np.array(["0"] * 11)), r"its t is an array of shape \(11,\)"),
+    "status.npz": (lambda good, p: _npz_with(good, p, status=np.array("fine")), r"its status 'fine' is none of success"),
+    "empty.nc": (lambda good, p: p.write_bytes(b""), r"is empty \(0 bytes\)"),
+    "text.nc": (lambda good, p: p.write_text("netcdf?\n"), r"is not a netCDF file but text"),
+    "zip.nc": (lambda good, p: p.write_bytes(good.with_suffix(".npz").read_bytes()),
+               r"is not a netCDF file but a zip archive: .* would end in \.npz"),
+    "other.nc": (lambda good, p: __import__("xarray").Dataset({"x": ("n", [1.0, 2.0])}).to_netcdf(p),
+                 r"is not a result nvib saved: it has no u, v, a, time, dof \(it holds x\)"),
+    "truncated.nc": (_half, r"cannot be read as netCDF: it is damaged or truncated"),
+}
+
+
+@pytest.fixture(scope="module")
+def good_files(tmp_path_factory):
+    """A result saved as .npz (and .nc when xarray is there): 11 saved times of the building's 6 DOFs."""
+    folder = tmp_path_factory.mktemp("good")
+    res = nvib.solve(nvib.load_scene("building"), nvib.Newmark(), dt=0.1, t_end=1.0)
+    res.save(folder / "good.npz")
+    try:
+        res.save(folder / "good.nc")
+    except ImportError:
+        pass
+    return folder
+
+
+@pytest.mark.parametrize("name", list(BAD_FILES))
+def test_a_file_nvib_did_not_write_is_refused_by_name(name, good_files, tmp_path):
+    write, says = BAD_FILES[name]
+    good = good_files / f"good{os.path.splitext(name)[1]}"
+    if name in ("other.nc", "truncated.nc"):  # written by xarray
+        pytest.importorskip("xarray")
+    path = tmp_path / name
+    write(good, path)
+    with pytest.raises(nvib.ArgumentError, match=says) as exc:
+        nvib.load_result(path)
+    assert isinstance(exc.value, ValueError) and exc.value.argument == "path"
+    assert str(exc.value).startswith(f"path: {str(path)!r} ")
+    assert "allow_pickle" not in str(exc.value) and "unsafe" not in str(exc.value)
+
+
+def test_a_missing_file_says_so(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nowhere.npz"):
+        nvib.load_result(tmp_path / "nowhere.npz")
