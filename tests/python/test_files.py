@@ -193,7 +193,8 @@ def _npy_bytes():
 # name: (how to write it from a good .npz / .nc and the scratch path, what the message says)
 BAD_FILES = {
     "empty.npz": (lambda good, p: p.write_bytes(b""), r"is empty \(0 bytes\)"),
-    "text.npz": (lambda good, p: p.write_text("t,u:x\n0.0,1.0\n"), r"is not a \.npz archive \(a zip file\) but text"),
+    "text.npz": (lambda good, p: p.write_text("t,u:x\n0.0,1.0\n", encoding="utf-8"),
+                 r"is not a \.npz archive \(a zip file\) but text"),
     "other.npz": (lambda good, p: np.savez(p, x=np.arange(3), y=np.ones(2)),
                   r"is not a result nvib saved: it has no t, u, v, a, dofs \(it holds x, y\)"),
     "truncated.npz": (_half, r"is damaged or truncated"),
@@ -208,9 +209,11 @@ BAD_FILES = {
     "shape.npz": (lambda good, p: _npz_with(good, p, u=np.zeros((3, 2))),
                   r"its u is an array of shape \(3, 2\) and dtype float64, not 11 x 6 numbers"),
     "strings.npz": (lambda good, p: _npz_with(good, p, t=np.array(["0"] * 11)), r"its t is an array of shape \(11,\)"),
-    "status.npz": (lambda good, p: _npz_with(good, p, status=np.array("fine")), r"its status 'fine' is none of success"),
+    "status.npz": (lambda good, p: _npz_with(good, p, status=np.array("fine")),
+                   r"its status 'fine' is none of success"),
     "empty.nc": (lambda good, p: p.write_bytes(b""), r"is empty \(0 bytes\)"),
-    "text.nc": (lambda good, p: p.write_text("netcdf?\n"), r"is not a netCDF file but text"),
+    "text.nc": (lambda good, p: p.write_text("netcdf?\n", encoding="utf-8"),
+                r"is not a netCDF file but text"),
     "zip.nc": (lambda good, p: p.write_bytes(good.with_suffix(".npz").read_bytes()),
                r"is not a netCDF file but a zip archive: .* would end in \.npz"),
     "other.nc": (lambda good, p: __import__("xarray").Dataset({"x": ("n", [1.0, 2.0])}).to_netcdf(p),
