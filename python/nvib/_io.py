@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import csv
 import os
 
 import numpy as np
 
 from . import _checks
+from ._solve import ground_a
 
 FORMATS = (".npz", ".csv")
 
@@ -15,10 +17,12 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
     """Writes ``result`` to ``path`` by its extension.
 
     .npz: t, u, v, a, dofs, status, scheme, dt, the stats counters, energy_* columns
-    (if recorded), the recorded effects (``effect_arrays``), the failure message (if any) and the
-    ``extra`` entries.
+    (if recorded), ground_a (under a ground motion: the ground's acceleration at each saved DOF, what
+    ``absolute_a`` adds to a), the recorded effects (``effect_arrays``), the failure (if any:
+    ``failure_fields``) and the ``extra`` entries.
     .csv: a header ``t,u:<dof>,...,v:<dof>,...,a:<dof>,...[,energy:<term>,...][,effect:<name>:<field>,...]``
-    and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999)."""
+    and the values as the shortest decimals that read back exactly (0.3, not 0.29999999999999999); a name
+    holding a comma, double quote or line break is quoted as RFC 4180 says (Python's csv module reads it)."""
     ext = os.path.splitext(str(path))[1].lower()
     if ext == ".npz":
         _write_npz(path, result, extra)
@@ -26,6 +30,16 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
         _write_csv(path, result)
     else:
         raise _checks.value_error("path", f"expected a file ending in {' or '.join(FORMATS)}, got {path!r}")
+
+
+def failure_fields(failure) -> dict:
+    """What a Failure holds beside its status (which the result's status repeats): failure (the message),
+    failure_step, failure_t, failure_dof (-1 if none) and failure_residuals (Newton's, possibly none);
+    nothing when the run did not fail."""
+    if failure is None:
+        return {}
+    return {"failure": failure.message, "failure_step": int(failure.step), "failure_t": float(failure.t),
+            "failure_dof": int(failure.dof), "failure_residuals": [float(x) for x in failure.residuals]}
 
 
 def effect_columns(result):
@@ -75,10 +89,13 @@ def _write_npz(path: str, result, extra: dict | None) -> None:
         for k, val in result.energy.as_dict().items():
             data[f"energy_{k}"] = val
     data.update(effect_arrays(result))
-    if result.failure is not None:
-        data["failure"] = np.array(result.failure.message)
+    for k, val in failure_fields(result.failure).items():
+        data[k] = np.array(val, dtype=float) if k == "failure_residuals" else np.array(val)
     data["units"] = np.array(result.units, dtype=str)
     data["relative_to_ground"] = np.array(int(result.relative_to_ground))
+    ground = ground_a(result)
+    if ground is not None:
+        data["ground_a"] = ground
     if result.warnings:
         data["warnings"] = np.array("\n".join(result.warnings))
     for k, val in (extra or {}).items():
@@ -99,6 +116,9 @@ def _write_csv(path: str, result) -> None:
         head.append(name)
     table = np.hstack(cols) if len(result.t) else np.zeros((0, len(head)))
     with open(path, "w", encoding="utf-8", newline="") as fh:  # shortest decimals that read back exactly
-        fh.write(",".join(head) + "\n")
-        for row in table.tolist():
-            fh.write(",".join(map(repr, row)) + "\n")
+        out = csv.writer(fh, lineterminator="\n")  # a name with a comma, quote or line break is quoted (RFC 4180)
+        # csv quotes a field holding the line terminator, "\n", but not a lone "\r", which readers take for a
+        # line break too: a header with one is quoted throughout
+        (csv.writer(fh, lineterminator="\n", quoting=csv.QUOTE_ALL) if any("\r" in h for h in head) else out
+         ).writerow(head)
+        out.writerows([repr(x) for x in row] for row in table.tolist())

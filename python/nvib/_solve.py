@@ -92,16 +92,38 @@ Result.warnings = property(
         "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
 
 
+def ground_a(res: Result) -> np.ndarray | None:
+    """The ground's acceleration at the saved DOFs and times, (n_saved, n_saved_dofs): what ``absolute_a``
+    adds to ``a``. None when the model has no ground motion, and when it is not known: a result read from a
+    file written before files held it (``relative_to_ground`` then says whether ``a`` is relative)."""
+    extras = _extras(res)
+    if extras.get("ground_a") is not None:  # read from a file
+        return np.asarray(extras["ground_a"])
+    ground = extras.get("ground")
+    if ground is None:
+        return None
+    t = np.asarray(res.t)
+    out = np.zeros((len(t), len(res.dofs)))
+    for r, signal in ground:
+        out += np.outer(_signal_values(signal, t), r)
+    return out
+
+
 def _absolute_a(self) -> np.ndarray:
     """Absolute accelerations of the saved DOFs, a + r a_g(t) for each ground acceleration of the model
     (its displacements, velocities and accelerations are relative to the ground); ``a`` itself when the
-    model has no ground motion."""
-    if self._ground is None:
-        return self.a
-    out = np.array(self.a, copy=True)
-    for r, signal in self._ground:
-        out += np.outer(_signal_values(signal, np.asarray(self.t)), r)
-    return out
+    model has no ground motion. A result read from a file that holds a relative to the ground but not the
+    ground's acceleration (written before files held it) raises ArgumentError naming the file."""
+    g = ground_a(self)
+    if g is not None:
+        return self.a + g
+    if self.relative_to_ground:
+        file = _extras(self).get("file")
+        where = f"the file {file!r}" if file else "this result"
+        raise _checks.value_error("absolute_a", f"{where} holds a relative to the ground but not the ground's "
+                                                "acceleration (no ground_a: written before nvib saved it), so the "
+                                                "absolute accelerations cannot be rebuilt; solve again to have them")
+    return self.a
 
 
 Result.absolute_a = property(_absolute_a)
