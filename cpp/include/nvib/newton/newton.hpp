@@ -69,7 +69,7 @@ class NewtonSolver {
     p.update(x);
     const bool linear = p.linear();
     if (!linear && opt_.mode == NewtonMode::incremental) return incremental(p, model, x, t, step, st);
-    bool du_small = false;
+    bool du_small = false, du_settled = false;
     for (int k = 0;; ++k) {
       const Residual res = p.residual(r_);
       residuals_.push_back(res.norm);
@@ -83,16 +83,20 @@ class NewtonSolver {
         accepted_ = 0.0;
         return Status::success;
       }
-      // A negligible increment that no longer lowers the residual: the iterate
-      // is as good as working precision allows only if the residual is within
-      // the round-off of its own evaluation; otherwise Newton has stalled.
-      if (k > 0 && du_small && res.norm >= residuals_[static_cast<size_t>(k) - 1]) {
-        if (res.norm <= tol + roundoff(p)) {
-          accepted_ = relative(res);
-          return Status::success;
-        }
-        return stalled(t, step, tol);
+      // A residual within the round-off of its own evaluation (8 eps times the magnitudes of the terms
+      // that cancel in it, K u among them, not the net force the tolerance is scaled by) is as small as
+      // working precision allows once the increment that led to it has settled (below 100 rtol of x, the
+      // 1e-8 of u a displacement-increment test uses by default) or the residual no longer falls: then
+      // it is accepted, whatever the increment's noise (2e-12 to 1e-11 of u on stiff finite-element
+      // models, too much for a test at 1e-13). Evaluated only when the plain test fails.
+      const bool falling = k > 0 && res.norm < residuals_[static_cast<size_t>(k) - 1];
+      if (k > 0 && (du_settled || !falling) && res.norm <= tol + roundoff(p)) {
+        accepted_ = relative(res);
+        return Status::success;
       }
+      // Beyond that bound, a negligible increment that no longer lowers the residual means Newton has
+      // stalled (a tangent that lies).
+      if (k > 0 && du_small && !falling) return stalled(t, step, tol);
       if (k >= opt_.max_iter) return not_converged(t, step, tol);
 
       bool refactor = false;
@@ -113,8 +117,9 @@ class NewtonSolver {
         if (s != Status::success) return s;
       }
       iterate(p, x, st);
-      du_small = du_.template lpNorm<Eigen::Infinity>() <=
-                 opt_.atol + 1e-3 * opt_.rtol * x.template lpNorm<Eigen::Infinity>();
+      const double du_norm = du_.template lpNorm<Eigen::Infinity>(), x_norm = x.template lpNorm<Eigen::Infinity>();
+      du_small = du_norm <= opt_.atol + 1e-3 * opt_.rtol * x_norm;
+      du_settled = du_norm <= opt_.atol + 100.0 * opt_.rtol * x_norm;
       if (linear) return Status::success;  // in equilibrium after one solve, up to round-off
       if (opt_.mode == NewtonMode::one_iteration) return accept_unchecked(p, t, step);
     }
