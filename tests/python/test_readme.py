@@ -51,3 +51,71 @@ def test_the_type_stub_lists_every_status():
     members = {t.id: node.value.value for node in cls.body if isinstance(node, ast.Assign)
                for t in node.targets}
     assert members == {s.name: s.value for s in nvib.Status}
+
+
+# ---- the command line: every example runs as the README says ---------------------------------------
+
+def _fenced_blocks(text: str) -> list[tuple[str, str]]:
+    """(language, body) of every fenced block."""
+    return re.findall(r"^```(\w*)\n(.*?)^```", text, re.S | re.M)
+
+
+def shell_examples(text: str) -> list[tuple[str, int, list[str]]]:
+    """(command, expected exit status, README lines of output shown after it) of every `nvib ...` example:
+    the lines of the shell blocks (``$ nvib ...`` with the output shown below it in a plain block) and the
+    inline `nvib run ...` commands of the prose. A trailing comment ``# exits N`` gives the status N,
+    otherwise 0; optional arguments in [brackets] are left out; templates with a placeholder in capitals
+    (``nvib paper OUTDIR``) are not run, their concrete form is; a command shown twice runs once."""
+    out = []
+    for lang, body in _fenced_blocks(text):
+        if lang not in ("bash", ""):
+            continue
+        lines = body.splitlines()
+        for k, line in enumerate(lines):
+            shown = []
+            if line.startswith("$ nvib "):
+                line = line[2:]
+                shown = [x for x in lines[k + 1:] if not x.startswith("$ ")]
+            if not line.startswith("nvib "):
+                continue
+            command, _, comment = line.partition(" #")
+            status = re.search(r"exits (\d+)", comment)
+            command = re.sub(r"\[[^\]]*\]", " ", command)
+            if re.search(r"\b[A-Z]{3,}\b", command):
+                continue
+            out.append((" ".join(command.split()), int(status.group(1)) if status else 0, shown))
+    for span in re.findall(r"`(nvib run [^`]+)`", text):
+        out.append((span, 0, []))
+    first = {}
+    for command, status, shown in out:  # a command shown twice is run once
+        first.setdefault(command, (command, status, shown))
+    return list(first.values())
+
+
+def _example_ids(examples):
+    return [c[5:60] for c, *_ in examples]
+
+
+EXAMPLES = shell_examples(README.read_text(encoding="utf-8")) if README.is_file() else []
+
+
+def test_the_shell_examples_are_found():
+    text = readme()
+    commands = [c for c, *_ in shell_examples(text)]
+    assert len(commands) >= 15
+    assert any(s == 1 for _, s, _ in shell_examples(text))  # the example of a failure is checked as one
+
+
+@pytest.mark.parametrize("command, status, shown", EXAMPLES, ids=_example_ids(EXAMPLES))
+def test_shell_example_exits_as_the_readme_says(command, status, shown, tmp_path, monkeypatch, capsys):
+    from _cli import run_cli
+
+    # A record of the user's, named as the README names it: the synthetic record shipped with nvib.
+    record = Path(nvib.__file__).parent / "scenes" / "records" / "sgm1.AT2"
+    (tmp_path / "elcentro.AT2").write_bytes(record.read_bytes())
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run_cli(capsys, *command.split()[1:])
+    assert code == status, f"{command}: exit status {code}, the README says {status}\n{out[-2000:]}{err[-2000:]}"
+    got = {" ".join(x.split()) for x in out.splitlines()}
+    missing = [x for x in shown if " ".join(x.split()) not in got]
+    assert not missing, f"{command} no longer prints what the README shows: {missing}\n{out}"
