@@ -119,3 +119,22 @@ def test_shell_example_exits_as_the_readme_says(command, status, shown, tmp_path
     got = {" ".join(x.split()) for x in out.splitlines()}
     missing = [x for x in shown if " ".join(x.split()) not in got]
     assert not missing, f"{command} no longer prints what the README shows: {missing}\n{out}"
+
+
+# ---- the demo table is what `nvib demo` prints ------------------------------------------------------
+
+def test_the_demo_table_is_what_nvib_demo_prints(capsys):
+    from _cli import run_cli
+
+    blocks = [body for lang, body in _fenced_blocks(readme()) if body.startswith("Hardening oscillator")]
+    assert len(blocks) == 1, "README.md should show the output of nvib demo once"
+    code, out, _ = run_cli(capsys, "demo")
+    assert code == 0
+
+    def without_timing(text):
+        # The wall-time column (the last one of each scheme's row) is the machine's; the rest is compared.
+        lines = text.rstrip("\n").splitlines()
+        rule = next(k for k, x in enumerate(lines) if x.startswith("---"))
+        return lines[:rule + 1] + [x.rsplit(None, 1)[0] for x in lines[rule + 1:]]
+
+    assert without_timing(blocks[0]) == without_timing(out)
