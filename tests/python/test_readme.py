@@ -96,6 +96,21 @@ def _example_ids(examples):
     return [c[5:60] for c, *_ in examples]
 
 
+def scene_file(text: str) -> str:
+    """The README's example of a scene file."""
+    m = re.search(r"^A scene file \(TOML\).*?^```toml\n(.*?)^```", text, re.S | re.M)
+    assert m, "README.md's scene-file example moved"
+    return m.group(1)
+
+
+def user_files(folder: Path) -> None:
+    """The files the README's examples read, named as it names them: a record of the user's (the
+    synthetic record shipped with nvib) and the scene file it shows."""
+    record = Path(nvib.__file__).parent / "scenes" / "records" / "sgm1.AT2"
+    (folder / "elcentro.AT2").write_bytes(record.read_bytes())
+    (folder / "two_storey.toml").write_text(scene_file(readme()), encoding="utf-8")
+
+
 EXAMPLES = shell_examples(README.read_text(encoding="utf-8")) if README.is_file() else []
 
 
@@ -110,9 +125,7 @@ def test_the_shell_examples_are_found():
 def test_shell_example_exits_as_the_readme_says(command, status, shown, tmp_path, monkeypatch, capsys):
     from _cli import run_cli
 
-    # A record of the user's, named as the README names it: the synthetic record shipped with nvib.
-    record = Path(nvib.__file__).parent / "scenes" / "records" / "sgm1.AT2"
-    (tmp_path / "elcentro.AT2").write_bytes(record.read_bytes())
+    user_files(tmp_path)
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(capsys, *command.split()[1:])
     assert code == status, f"{command}: exit status {code}, the README says {status}\n{out[-2000:]}{err[-2000:]}"
@@ -138,3 +151,26 @@ def test_the_demo_table_is_what_nvib_demo_prints(capsys):
         return lines[:rule + 1] + [x.rsplit(None, 1)[0] for x in lines[rule + 1:]]
 
     assert without_timing(blocks[0]) == without_timing(out)
+
+
+# ---- the scene file is a sound model, and the README says what it gives ----------------------------
+
+def test_the_scene_file_example_is_a_sound_model(tmp_path):
+    import numpy as np
+
+    text = readme()
+    path = tmp_path / "two_storey.toml"
+    path.write_text(scene_file(text), encoding="utf-8")
+    model = nvib.load_scene(str(path))
+    # Every storey is held: no free (zero-frequency) mode that a ground motion would carry away.
+    w = model.linearized_frequencies(model.u0)
+    assert np.all(w > 1.0), w
+    stated = re.search(r"frequencies ([\d.]+) and\s+([\d.]+) rad/s, peak displacements ([\d.]+) mm \(x1\) "
+                       r"and ([\d.]+) mm \(x2\)", text)
+    assert stated, "README.md no longer says what the scene file gives"
+    w1, w2, p1, p2 = map(float, stated.groups())
+    assert np.allclose(np.sort(w), [w1, w2], atol=0.05)
+    res = nvib.solve(model, nvib.CEMDTS(), dt=model.scene["dt"], t_end=model.scene["t_end"], energy=True)
+    assert res.status == nvib.Status.success and not res.warnings
+    peaks = np.abs(res.u).max(axis=0) * 1e3
+    assert np.allclose(peaks, [p1, p2], atol=0.05), peaks
