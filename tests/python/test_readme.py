@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import re
+import sys
 from pathlib import Path
 
 import pytest
@@ -104,11 +105,13 @@ def scene_file(text: str) -> str:
 
 
 def user_files(folder: Path) -> None:
-    """The files the README's examples read, named as it names them: a record of the user's (the
+    """The files the README's examples read, named as it names them: the user's records (each the
     synthetic record shipped with nvib) and the scene file it shows."""
-    record = Path(nvib.__file__).parent / "scenes" / "records" / "sgm1.AT2"
-    (folder / "elcentro.AT2").write_bytes(record.read_bytes())
-    (folder / "two_storey.toml").write_text(scene_file(readme()), encoding="utf-8")
+    text = readme()
+    record = (Path(nvib.__file__).parent / "scenes" / "records" / "sgm1.AT2").read_bytes()
+    for name in set(re.findall(r"[\w-]+\.AT2", text)):
+        (folder / name).write_bytes(record)
+    (folder / "two_storey.toml").write_text(scene_file(text), encoding="utf-8")
 
 
 EXAMPLES = shell_examples(README.read_text(encoding="utf-8")) if README.is_file() else []
@@ -174,3 +177,23 @@ def test_the_scene_file_example_is_a_sound_model(tmp_path):
     assert res.status == nvib.Status.success and not res.warnings
     peaks = np.abs(res.u).max(axis=0) * 1e3
     assert np.allclose(peaks, [p1, p2], atol=0.05), peaks
+
+
+# ---- the Python snippets run, in the order the README shows them -----------------------------------
+
+def test_the_python_snippets_run_in_order(tmp_path, monkeypatch):
+    """One session through every Python block, each seeing the names the earlier ones defined, in a
+    folder with the user's files the README names; with nvib's required dependencies only (the
+    optional pandas, xarray and dask cannot be imported)."""
+    blocks = [body for lang, body in _fenced_blocks(readme()) if lang == "python"]
+    assert len(blocks) >= 10
+    user_files(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    for optional in ("pandas", "xarray", "dask"):
+        monkeypatch.setitem(sys.modules, optional, None)
+    namespace = {"__name__": "readme"}
+    for k, body in enumerate(blocks, 1):
+        try:
+            exec(compile(body, f"README.md, Python block {k}", "exec"), namespace)
+        except Exception as exc:
+            pytest.fail(f"README.md's Python block {k} ({body.splitlines()[0].strip()}) raises {exc!r}")
