@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import ast
 import re
+import shutil
+import subprocess
 import sys
 from pathlib import Path
 
@@ -14,8 +16,8 @@ import pytest
 import nvib
 from nvib.analysis import cost as cost_module
 
-ROOT = Path(__file__).resolve().parent.parent.parent
-README = ROOT / "README.md"
+from _readme import README, ROOT, fenced_blocks, outputs, scene_file, shell_examples
+
 STATUSES = [s.name for s in nvib.Status]
 
 
@@ -56,52 +58,8 @@ def test_the_type_stub_lists_every_status():
 
 # ---- the command line: every example runs as the README says ---------------------------------------
 
-def _fenced_blocks(text: str) -> list[tuple[str, str]]:
-    """(language, body) of every fenced block."""
-    return re.findall(r"^```(\w*)\n(.*?)^```", text, re.S | re.M)
-
-
-def shell_examples(text: str) -> list[tuple[str, int, list[str]]]:
-    """(command, expected exit status, README lines of output shown after it) of every `nvib ...` example:
-    the lines of the shell blocks (``$ nvib ...`` with the output shown below it in a plain block) and the
-    inline `nvib run ...` commands of the prose. A trailing comment ``# exits N`` gives the status N,
-    otherwise 0; optional arguments in [brackets] are left out; templates with a placeholder in capitals
-    (``nvib paper OUTDIR``) are not run, their concrete form is; a command shown twice runs once."""
-    out = []
-    for lang, body in _fenced_blocks(text):
-        if lang not in ("bash", ""):
-            continue
-        lines = body.splitlines()
-        for k, line in enumerate(lines):
-            shown = []
-            if line.startswith("$ nvib "):
-                line = line[2:]
-                shown = [x for x in lines[k + 1:] if not x.startswith("$ ")]
-            if not line.startswith("nvib "):
-                continue
-            command, _, comment = line.partition(" #")
-            status = re.search(r"exits (\d+)", comment)
-            command = re.sub(r"\[[^\]]*\]", " ", command)
-            if re.search(r"\b[A-Z]{3,}\b", command):
-                continue
-            out.append((" ".join(command.split()), int(status.group(1)) if status else 0, shown))
-    for span in re.findall(r"`(nvib run [^`]+)`", text):
-        out.append((span, 0, []))
-    first = {}
-    for command, status, shown in out:  # a command shown twice is run once
-        first.setdefault(command, (command, status, shown))
-    return list(first.values())
-
-
 def _example_ids(examples):
     return [c[5:60] for c, *_ in examples]
-
-
-def scene_file(text: str) -> str:
-    """The README's example of a scene file."""
-    m = re.search(r"^A scene file \(TOML\).*?^```toml\n(.*?)^```", text, re.S | re.M)
-    assert m, "README.md's scene-file example moved"
-    return m.group(1)
 
 
 def user_files(folder: Path) -> None:
@@ -142,7 +100,7 @@ def test_shell_example_exits_as_the_readme_says(command, status, shown, tmp_path
 def test_the_demo_table_is_what_nvib_demo_prints(capsys):
     from _cli import run_cli
 
-    blocks = [body for lang, body in _fenced_blocks(readme()) if body.startswith("Hardening oscillator")]
+    blocks = [body for lang, body in fenced_blocks(readme()) if body.startswith("Hardening oscillator")]
     assert len(blocks) == 1, "README.md should show the output of nvib demo once"
     code, out, _ = run_cli(capsys, "demo")
     assert code == 0
@@ -185,7 +143,7 @@ def test_the_python_snippets_run_in_order(tmp_path, monkeypatch):
     """One session through every Python block, each seeing the names the earlier ones defined, in a
     folder with the user's files the README names; with nvib's required dependencies only (the
     optional pandas, xarray and dask cannot be imported)."""
-    blocks = [body for lang, body in _fenced_blocks(readme()) if lang == "python"]
+    blocks = [body for lang, body in fenced_blocks(readme()) if lang == "python"]
     assert len(blocks) >= 10
     user_files(tmp_path)
     monkeypatch.chdir(tmp_path)
@@ -197,3 +155,19 @@ def test_the_python_snippets_run_in_order(tmp_path, monkeypatch):
             exec(compile(body, f"README.md, Python block {k}", "exec"), namespace)
         except Exception as exc:
             pytest.fail(f"README.md's Python block {k} ({body.splitlines()[0].strip()}) raises {exc!r}")
+
+
+# ---- what the examples write at the root is ignored by git (and kept out of the sdist: test_packaging)
+
+def test_what_the_examples_write_is_ignored_by_git():
+    written = outputs(readme())
+    assert {"building.png", "figures/"} <= written
+    git = shutil.which("git")
+    if git is None or subprocess.run([git, "-C", str(ROOT), "rev-parse", "--is-inside-work-tree"],
+                                     capture_output=True).returncode != 0:
+        pytest.skip("not a git work tree")
+    paths = sorted(p + "summary.md" if p.endswith("/") else p for p in written)
+    check = subprocess.run([git, "-C", str(ROOT), "check-ignore", "--no-index", "-v", "-n", *paths],
+                           capture_output=True, text=True)
+    unmatched = [line.split("\t", 1)[1] for line in check.stdout.splitlines() if line.startswith("::")]
+    assert not unmatched, f"not in .gitignore: {unmatched}"
