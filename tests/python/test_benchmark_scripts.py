@@ -1,9 +1,11 @@
 """Every benchmark script still starts: it imports what it uses from nvib and parses its options
-(`--help`), so a renamed module or parameter breaks a test rather than the next measurement."""
+(`--help`), so a renamed module or parameter breaks a test rather than the next measurement. No
+script names a folder of one machine."""
 
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 
@@ -21,3 +23,13 @@ def test_benchmark_script_starts(script):
                        text=True, timeout=300, cwd=BENCHMARKS)
     assert p.returncode == 0, p.stderr[-2000:]
     assert "usage:" in p.stdout and "Traceback" not in p.stderr
+
+
+@pytest.mark.skipif(not SCRIPTS, reason="not a source checkout (no benchmarks/ folder)")
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_script_names_no_path_of_one_machine(script):
+    # Paths are relative to the script (or the repository root it finds from it), never a folder of
+    # the machine it was written on; the results' machine lines record where nvib was loaded from.
+    with open(os.path.join(BENCHMARKS, script), encoding="utf-8") as fh:
+        text = fh.read()
+    assert not re.findall(r"(?<![\w.~])/(?:work|home|Users|root|opt|srv)/[\w./-]*", text)
