@@ -1,4 +1,5 @@
-"""The README tells the truth: what it lists, prints and runs is checked against nvib itself.
+"""The README tells the truth: what it lists, prints and runs is checked against nvib itself; and the
+repository cites no document that it does not hold.
 
 Skips when the tests run from elsewhere than a source checkout (no README.md beside them)."""
 
@@ -171,3 +172,30 @@ def test_what_the_examples_write_is_ignored_by_git():
                            capture_output=True, text=True)
     unmatched = [line.split("\t", 1)[1] for line in check.stdout.splitlines() if line.startswith("::")]
     assert not unmatched, f"not in .gitignore: {unmatched}"
+
+
+# ---- the repository cites only documents it holds --------------------------------------------------
+
+def _tracked_text_files() -> list[Path]:
+    git = shutil.which("git")
+    if git is None:
+        pytest.skip("git is not installed")
+    p = subprocess.run([git, "-C", str(ROOT), "ls-files", "-z"], capture_output=True)
+    if p.returncode != 0:
+        pytest.skip("not a git work tree")
+    suffixes = {".py", ".pyi", ".md", ".toml", ".txt", ".cpp", ".hpp", ".h", ".in", ".cmake", ".sh", ".cfg"}
+    return [ROOT / f for f in p.stdout.decode().split("\0") if f and Path(f).suffix in suffixes]
+
+
+def test_every_document_cited_is_in_the_repository():
+    """A document cited by a capitalised name ending in .md, as README.md is, must be a file of the
+    repository: a reader of the sources, the tests or the results has nothing else (the paper itself
+    is cited by its reference)."""
+    files = _tracked_text_files()
+    held = {f.name for f in files}
+    cited = {}
+    for f in files:
+        for name in set(re.findall(r"\b([A-Z][A-Z0-9_]*\.md)\b", f.read_text(encoding="utf-8", errors="replace"))):
+            if name not in held:
+                cited.setdefault(name, []).append(str(f.relative_to(ROOT)))
+    assert not cited, f"cited, but not in the repository: {cited}"
