@@ -46,6 +46,12 @@ def test_cost_rows_name_every_failing_status():
     assert all(f"'{s}'" in cost_module.__doc__ for s in STATUSES)
 
 
+def test_status_text_lists_every_status():
+    from nvib._labels import status_text
+
+    assert all(f"'{status_text(s)}'" in status_text.__doc__ for s in nvib.Status)
+
+
 def test_the_type_stub_lists_every_status():
     stub = Path(nvib.__file__).with_name("_core.pyi")
     if not stub.is_file():
