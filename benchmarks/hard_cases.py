@@ -1,7 +1,7 @@
 """Hard cases: run every case of the hard-case table with every scheme and print
 what was measured (status, time and step of a failure, energy errors, errors
 against the reference, Newton iterations, the equilibrium residual left by the
-incremental format) as markdown, followed by the table's expected outcomes, its
+one-iteration format) as markdown, followed by the table's expected outcomes, its
 regression pins (each with the value measured when it was set) and whether each
 holds. The regression pins in tests/hard/test_hard_cases.py are set from this
 output, with a margin of at most 2x.
@@ -147,8 +147,11 @@ def main(argv=None) -> int:
              f"Python {platform.python_version()}, nvib {nvib.__version__}, by `benchmarks/hard_cases.py` "
              "(same runs as `tests/hard/test_hard_cases.py`, through `tests/hard/hardcase_runs.py`).", "",
              "Schemes: LCDM = CentralDifference(); CEMDTS(0.45); Zhai(1/2, 1/2); Newmark(1/4, 1/2) and the "
-             "paper's GaM = GeneralizedAlpha(1/2, 1/2, 1/4, 1/2), each with iteration = one_iteration (the paper's "
-             "incremental format), newton, and (vehicle only) modified; PIM = PreciseIntegration(20, 2, 1).",
+             "paper's GaM = GeneralizedAlpha(1/2, 1/2, 1/4, 1/2), each with iteration = one_iteration (one Newton "
+             "iteration on the full residual per step, accepted), newton, and (vehicle only) modified; "
+             "PIM = PreciseIntegration(20, 2, 1). The paper runs Newmark and GaM in neither of these formats but in "
+             "the textbook incremental one (iteration = incremental), which `nvib paper` checks claim by claim "
+             "(`benchmarks/results/paper.md`): no row of theirs below has the paper as its basis.",
              "Energy errors are relative to the initial energy (closed forms); building and vehicle: nvib's "
              "energy balance error and the error against the reference (see hardcase_runs.py). "
              "'max residual': largest equilibrium residual of an accepted step relative to its force scale "

@@ -25,7 +25,7 @@ error of any run (or until the next refinement would take longer than --ref-budg
 Writes <out>/scipy_chain.md (machine, settings, equal-error table, every run) and <out>/scipy_chain.png
 (error against wall time).
 
-    /work/venv/bin/python benchmarks/scipy_chain.py [--n 10000] [--t-end 2] [--out benchmarks/results]
+    python benchmarks/scipy_chain.py [--n 10000] [--t-end 2] [--out benchmarks/results]
 """
 
 from __future__ import annotations
@@ -564,7 +564,8 @@ def main(argv=None) -> int:
               f"itself used; quote ratios rather than lone times). Whole script: {total / 60:.1f} min.")
     md.append("")
     md.append("Written by `benchmarks/scipy_chain.py` "
-              f"(`/work/venv/bin/python benchmarks/scipy_chain.py --n {n} --t-end {args.t_end:g}`).\n")
+              f"(`python {os.path.relpath(os.path.abspath(__file__), ROOT).replace(os.sep, '/')} --n {n} --t-end {args.t_end:g}`, "
+              "from the repository root).\n")
     md.append("## Case\n")
     md.append(f"`nvib.scenes.chain({n})`: {n} storeys of 1e5 kg, hardening storey springs k0 (1 + a d²) d "
               f"(k0 = 1e8 N/m, a = 10), dampers c = 2·0.02·√(k0 m) on the drifts, ground acceleration "

@@ -42,7 +42,8 @@ XI = 0.05
 
 
 def zhai_limit(xi: float) -> float:
-    """2(sqrt(1 + 4 xi^2) - 2 xi): Zhai(1/2, 1/2) with modal damping (derived in ALGORITHMS.md)."""
+    """2(sqrt(1 + 4 xi^2) - 2 xi): Zhai(1/2, 1/2) with modal damping, where an eigenvalue of the
+    amplification matrix passes through -1."""
     return 2.0 * (math.sqrt(1.0 + 4.0 * xi * xi) - 2.0 * xi)
 
 
@@ -59,7 +60,7 @@ def schemes() -> list[tuple[object, float | None, float | None]]:
         (nvib.CEMDTS(0.5), *cd),
         (nvib.CEMDTS(1.0), *cd),
         (nvib.Zhai(0.5, 0.5), *cd),
-        (nvib.Zhai(0.6, 0.6), math.sqrt(2.0 / 0.6), None),  # sqrt(2/p) for psi = phi = p > 1/2 (ALGORITHMS.md)
+        (nvib.Zhai(0.6, 0.6), math.sqrt(2.0 / 0.6), None),  # sqrt(2/p) for psi = phi = p > 1/2 (an eigenvalue at -1)
         (nvib.Newmark(0.25, 0.5), math.inf, math.inf),
         (nvib.Newmark(1 / 6, 0.5), math.sqrt(12.0), math.sqrt(12.0)),  # (gamma/2 - beta)^(-1/2), any xi at gamma = 1/2
         (nvib.GeneralizedAlpha(), math.inf, math.inf),
@@ -218,9 +219,10 @@ def main() -> int:
         "come from the principal root, continued from Ω → 0 (see the `nvib.stability` docstring).",
         "",
         "**Against what.** The closed forms: Ω_crit = 2 for the central-difference family undamped; "
-        "2(√(1+4ξ²) − 2ξ) for Zhai(½, ½) with damping (derived in ALGORITHMS.md); √(2/p) for Zhai(p, p), "
-        "p > ½; (γ/2 − β)^(−1/2) = √12 for Newmark linear acceleration (Hughes 2000, ch. 9; independent of ξ "
-        "at γ = ½); none for the unconditionally stable ones. LCDM and CEMDTS share Zhai's damped limit: all "
+        "2(√(1+4ξ²) − 2ξ) for Zhai(½, ½) with damping and √(2/p) for Zhai(p, p), p > ½ (each where an "
+        "eigenvalue of the amplification matrix passes through −1); (γ/2 − β)^(−1/2) = √12 for Newmark "
+        "linear acceleration (Hughes 2000, ch. 9; independent of ξ at γ = ½); none for the unconditionally "
+        "stable ones. LCDM and CEMDTS share Zhai's damped limit: all "
         "three satisfy u_{n+1} − 2u_n + u_{n−1} = Δt² a_n and evaluate the force with the same velocity "
         "(u_{n+1} − u_n)/Δt + Δt a_n/2, so their displacement recurrences are one and the same.",
         "",

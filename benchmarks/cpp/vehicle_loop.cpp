@@ -1,5 +1,5 @@
 // Hand-written reference loop for benchmarks/cost.py: the vehicle scene
-// (python/nvib/scenes/vehicle.toml, /work/shared/VEHICLE.md) integrated with
+// (python/nvib/scenes/vehicle.toml: Huo & Dai 2019's passenger car) integrated with
 // plain arrays, no nvib, no Eigen.
 //
 //   q = [z_c, beta_c, z_t1, beta_t1, z_t2, beta_t2, z_w1, z_w2, z_w3, z_w4], z downward.

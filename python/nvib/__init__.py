@@ -13,9 +13,10 @@ a DOP853 solution to measure against), ``cost(model, schemes, dts)`` and
 nvib is unit-agnostic; the built-in scenes use SI units (m, kg, s, N, rad).
 """
 
-from __future__ import annotations
-
-import os
+# No ``from __future__ import annotations`` here: it would bind ``annotations`` in the package's
+# namespace (dir(nvib)); an annotation naming what only the type stubs hold is a string instead.
+# Modules the package itself uses are imported under private names, for the same reason.
+import os as _os
 
 from . import _core, _schemes
 from ._core import DEFAULT_MAX_ENERGY_ERROR
@@ -76,15 +77,15 @@ def expm(A, squarings: int = 20):
 
 def include_dir() -> str:
     """Folder of the installed C++ headers (nvib/nvib.hpp)."""
-    return os.path.join(os.path.dirname(__file__), "include")
+    return _os.path.join(_os.path.dirname(__file__), "include")
 
 
 def cmake_dir() -> str:
     """Folder holding nvibConfig.cmake: pass it as nvib_DIR or in CMAKE_PREFIX_PATH."""
-    return os.path.join(os.path.dirname(__file__), "share", "cmake", "nvib")
+    return _os.path.join(_os.path.dirname(__file__), "share", "cmake", "nvib")
 
 
-def __getattr__(name: str) -> type[_core._Scheme]:
+def __getattr__(name: str) -> "type[_core._Scheme]":
     # Only for names not found otherwise; tells type checkers that the scheme
     # classes, set from the registry above, are attributes of nvib.
     raise AttributeError(f"module 'nvib' has no attribute {name!r}")

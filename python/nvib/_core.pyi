@@ -22,6 +22,8 @@ class Status(Enum):
     diverged = 1
     newton_failed = 2
     singular_matrix = 3
+    interrupted = 4
+    collapsed = 5
 
 class Stats:
     num_steps: int

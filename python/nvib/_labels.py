@@ -14,5 +14,6 @@ _STATUS_TEXT = {"newton_failed": "Newton failed", "singular_matrix": "singular i
 
 
 def status_text(status) -> str:
-    """How a run ended, in words: 'diverged', 'Newton failed', 'singular iteration matrix', 'interrupted'."""
+    """How a run ended, in words: 'success', 'diverged', 'Newton failed', 'singular iteration matrix',
+    'interrupted', 'collapsed'."""
     return _STATUS_TEXT.get(status.name, status.name)

@@ -32,9 +32,10 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-# The paper's settings (PAPER.md): Newmark beta = 1/4, gamma = 1/2; GaM alpha_m =
-# alpha_f = 1/2, beta = 1/4, gamma = 1/2; CEMDTS eta = 0.45; PIM predictor-corrector.
-# "one_iteration": one Newton iteration on the full residual per step, accepted;
+# The paper's settings (Yang et al. 2017, section 4): Newmark beta = 1/4, gamma = 1/2; GaM
+# alpha_m = alpha_f = 1/2, beta = 1/4, gamma = 1/2; CEMDTS eta = 0.45; PIM predictor-corrector.
+# "one_iteration": one Newton iteration on the full residual per step, accepted (not the paper's
+# incremental format, iteration="incremental", which nvib paper runs);
 # "newton": full Newton-Raphson; "modified": one tangent per step.
 SCHEMES = {
     "LCDM": lambda: nvib.CentralDifference(),

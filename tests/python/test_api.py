@@ -3,7 +3,11 @@ DOF selection, failure reporting, dense mass and step-by-step integration."""
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -531,3 +535,23 @@ def test_evaluate_force_matches_the_laws():
         f_c + 1.0 * 9.81 * 0.5 * math.sin(u[2]) - 10.0 * math.sin(6.0 * t),
     ])
     assert np.allclose(md.evaluate_force(u, v, t), expected, rtol=1e-13, atol=1e-13)
+
+
+# The public names of a fresh `import nvib` (a new process: other tests import more submodules):
+# its own subpackages, never a module it merely uses (os) nor the `annotations` feature that
+# `from __future__ import annotations` binds.
+PUBLIC_SUBPACKAGES = {"analysis": "nvib.analysis", "exact": "nvib.analysis.exact",
+                      "stability": "nvib.analysis.stability", "scenes": "nvib.scenes"}
+
+
+def test_namespace_holds_no_stray_modules_or_future_features():
+    code = ("import json, types, __future__, nvib\n"
+            "print(json.dumps({n: [type(v).__name__, getattr(v, '__name__', None)] for n, v in vars(nvib).items()"
+            " if isinstance(v, (types.ModuleType, __future__._Feature))}))")
+    package_parent = os.path.dirname(os.path.dirname(nvib.__file__))  # the nvib this test imported
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [package_parent, os.environ.get("PYTHONPATH")])))
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env).stdout
+    found = json.loads(out)
+    assert "annotations" not in dir(nvib) and not any(kind == "_Feature" for kind, _ in found.values()), found
+    public = {n: mod for n, (_, mod) in found.items() if not n.startswith("_")}
+    assert public == PUBLIC_SUBPACKAGES  # what nvib uses itself goes under a private name (_os, _core)

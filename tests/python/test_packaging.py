@@ -1,7 +1,8 @@
-"""Packaging: what the sdist holds, the cached wheel build surviving a new
-isolated build environment, the declared dependencies, the pytest warnings
-policy, text files opened as UTF-8, and the README's g++ command for C++ users
-of the installed package.
+"""Packaging: what the sdist holds (and not: figures, virtual environments,
+builds, what the README's examples write at the root), the cached wheel build
+surviving a new isolated build environment, the declared dependencies, the
+pytest warnings policy, text files opened as UTF-8, and the README's g++
+command for C++ users of the installed package.
 
 The tests that read the source tree (pyproject.toml, README.md, CMakeLists.txt)
 skip when the tests run from elsewhere than a source checkout."""
@@ -25,6 +26,7 @@ import pytest
 import nvib
 
 import _build_tools
+import _readme
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
@@ -55,7 +57,7 @@ _SKIPPED_IN_COPY = shutil.ignore_patterns(".git", "build", "_skbuild", "dist", "
 _VENV_PARTS = {".venv", ".ci-venv", "venv", ".tox", ".nox"}
 
 
-def test_sdist_holds_sources_tests_and_licence_but_no_figures_venvs_or_builds(tmp_path, monkeypatch):
+def test_sdist_holds_sources_tests_and_licence_but_no_figures_venvs_builds_or_example_outputs(tmp_path, monkeypatch):
     root = _source_checkout()
     try:
         from scikit_build_core.build import build_sdist
@@ -65,8 +67,13 @@ def test_sdist_holds_sources_tests_and_licence_but_no_figures_venvs_or_builds(tm
     # virtual environments (under names .gitignore does not list too) and build folders.
     src = tmp_path / "src"
     shutil.copytree(root, src, ignore=_SKIPPED_IN_COPY)
+    # And what the README's examples write when run from the root: building.png, nvib paper's figures/, ...
+    outputs = sorted(o + "summary.md" if o.endswith("/") else o
+                     for o in _readme.outputs((root / "README.md").read_text(encoding="utf-8")))
+    assert "building.png" in outputs
     for decoy in (".venv/pyvenv.cfg", ".venv-py39/pyvenv.cfg", ".ci-venv/lib/site.py", "venv/pyvenv.cfg",
-                  "build/cp311-cp311-linux_x86_64/CMakeCache.txt", "python/nvib/_core.cpython-311-x86_64-linux-gnu.so"):
+                  "build/cp311-cp311-linux_x86_64/CMakeCache.txt", "python/nvib/_core.cpython-311-x86_64-linux-gnu.so",
+                  *outputs):
         (src / decoy).parent.mkdir(parents=True, exist_ok=True)
         (src / decoy).write_text("decoy\n", encoding="utf-8")
     monkeypatch.chdir(src)
@@ -98,6 +105,8 @@ def test_sdist_holds_sources_tests_and_licence_but_no_figures_venvs_or_builds(tm
     builds = sorted(f for f in files if f.split("/")[0] in ("build", "_skbuild", "dist")
                     or f.endswith((".so", ".pyd", ".o")) or "__pycache__" in f.split("/"))
     assert not builds, builds
+    written = sorted(set(outputs) & files)
+    assert not written, written
     size = sdist.stat().st_size
     assert size < 2 * 1024 * 1024, f"sdist is {size / 1e6:.2f} MB"
 

@@ -124,7 +124,8 @@ def _hardening_energy(x, v):
 
 
 def _cemdts(accel, u0, v0, h, n, eta):
-    """CEMDTS as written in DESIGN.md (eta = 0 is the synchronized leapfrog); a_{-1} = a_0."""
+    """CEMDTS as cpp/include/nvib/schemes/cemdts.hpp states it (eta = 0 is the synchronized leapfrog);
+    a_{-1} = a_0."""
     u, v = np.empty(n + 1), np.empty(n + 1)
     u[0], v[0] = u0, v0
     a_prev = a = accel(u0)

@@ -1,5 +1,5 @@
 """Built-in scenes checked against physics computed by hand (the paper's
-numbers, VEHICLE.md's static checks, closed forms), and scene-file errors
+numbers, the vehicle's static checks, closed forms), and scene-file errors
 that name the file, the effect index and the key."""
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 # ---------------------------------------------------------------------------
-# Vehicle parameters, from VEHICLE.md (not read back from the library).
+# Vehicle parameters, from Huo & Dai, Shock and Vibration 2019, article 2015465, Table 1 (the source
+# vehicle.toml cites; not read back from the library).
 M_C, J_C, M_T, J_T, M_W = 34500.0, 1.5604e6, 3500.0, 1722.0, 2200.0
 K_PZ, K_SZ = 1.173e6, 0.61e6  # per axle box / per side; x2 per wheelset / bogie
 G_HERTZ = 5.18e-8
@@ -79,7 +80,7 @@ def test_scene_settings_match_the_paper():
     assert hard.mass_matrix[0, 0] == 1.0
     assert hard.evaluate_force([1.5], [0.0])[0] == pytest.approx(100.0 * (1 + 30.0 * 1.5**2) * 1.5, rel=1e-15)
     assert hard.linearized_frequencies()[0] == pytest.approx(10.0, rel=1e-14)
-    # secant omega_max = sqrt(k0 (1 + a x0^2) / m) = 82.76 rad/s (PAPER.md)
+    # secant omega_max = sqrt(k0 (1 + a x0^2) / m) = 82.76 rad/s (Yang et al. 2017, section 4.2)
     assert math.sqrt(hard.evaluate_force([1.5], [0.0])[0] / 1.5) == pytest.approx(82.76, abs=0.005)
     bld = nvib.load_scene("building")
     assert np.all(bld.u0 == 0) and np.all(bld.v0 == 0)
@@ -118,7 +119,7 @@ def test_building_ground_load_is_minus_m_ag():
 
 
 # ---------------------------------------------------------------------------
-# vehicle (VEHICLE.md's checks)
+# vehicle: static equilibrium under gravity, frequencies
 
 
 def test_vehicle_static_wheel_load(vehicle, vehicle_contacts):
@@ -169,7 +170,7 @@ def test_vehicle_highest_linearised_frequency(vehicle):
     # the wheelset bouncing on its two contacts and its primary springs
     k_wheel = 1.5 * P0 ** (1.0 / 3.0) / G_HERTZ
     assert w[-1] == pytest.approx(math.sqrt((2 * k_wheel + 2 * K_PZ) / M_W), rel=1e-3)
-    assert w[-1] * 1e-3 < 2.0  # explicit schemes stable at dt = 1e-3 (PAPER.md)
+    assert w[-1] * 1e-3 < 2.0  # explicit schemes stable at the paper's dt = 1e-3 (Yang et al. 2017, 5.2)
 
 
 def test_vehicle_equilibrium_residual(vehicle):

@@ -90,7 +90,7 @@ def test_undamped_limit_of_the_central_difference_family_is_2(scheme):
 
 @pytest.mark.parametrize("xi", [0.05, 0.1, 0.3])
 def test_damped_zhai_limit(xi):
-    expected = 2.0 * (math.sqrt(1.0 + 4.0 * xi * xi) - 2.0 * xi)  # ALGORITHMS.md section 1, derived
+    expected = 2.0 * (math.sqrt(1.0 + 4.0 * xi * xi) - 2.0 * xi)  # an eigenvalue passes through -1 there
     assert stab.critical_omega_h(nvib.Zhai(0.5, 0.5), xi) == pytest.approx(expected, rel=1e-6)
 
 

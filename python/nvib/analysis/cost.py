@@ -21,7 +21,8 @@ takes), with the same keys for nvib, SciPy and any other contender:
                 counters of the run (NaN where a contender does not report one:
                 SciPy reports no Newton iterations, and no step count when it
                 outputs at given times)
-    status      'success'; 'diverged', 'newton_failed', 'singular_matrix', 'interrupted' (nvib);
+    status      'success'; 'diverged', 'newton_failed', 'singular_matrix', 'collapsed' (nvib; a run
+                stopped as 'interrupted', by Ctrl-C or an exception in a Python callback, raises);
                 'failed' (SciPy gave up); 'skipped' (not run: a looser tolerance of the
                 same method already took longer than max_time)
     message     why a run failed or was skipped ('' on success)

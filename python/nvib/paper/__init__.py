@@ -12,11 +12,14 @@ the paper with the paper's schemes and writes into ``outdir``:
     eta_study.csv             one row per (problem, η), and half-step LCDM
     summary.md                every table in markdown, with the figures
 
-Schemes, with the paper's settings (PAPER.md): LCDM with synchronized and
-with half-step velocity (same displacements, different velocities); CEMDTS(0.45);
-Newmark(1/4, 1/2) and GαM = GeneralizedAlpha(1/2, 1/2, 1/4, 1/2), each in the
-one-iteration format (iteration 'one_iteration': one Newton iteration on the
-full residual per step, accepted as is) and with full Newton iteration; PIM (20 squarings, interpolation degree 2, 1 correction).
+Schemes, with the paper's settings (Yang et al. 2017, section 4): LCDM with
+synchronized and with half-step velocity (same displacements, different
+velocities); CEMDTS(0.45); Newmark(1/4, 1/2) and GαM = GeneralizedAlpha(1/2,
+1/2, 1/4, 1/2), each in the paper's incremental format (iteration
+'incremental': Chopra section 5.7, the paper's section 6), in the one-iteration
+format (iteration 'one_iteration': one Newton iteration on the full residual
+per step, accepted as is) and with full Newton iteration; PIM (20 squarings,
+interpolation degree 2, 1 correction).
 
 Measures (one row per run):
 
