@@ -333,7 +333,8 @@ class Model:
         return (index, coef, law, tangent, where, *flags, initial)
 
     def _effect_array(self, i: int, spec: dict) -> "_core.EffectArray":
-        """Many effects of one law: {"type": ..., "i": [...], "j": [...] (optional; -1: the ground), each
+        """Many effects of one law: {"type": ..., "i": [...], "j": [...] (optional; -1: the ground; one
+        index or name: the same for every effect), each
         parameter one value or one per effect, "name": ...}; d_k = u[i_k] - u[j_k]."""
         where = f"effects[{i}]"
         kind = spec.get("type")
@@ -345,7 +346,10 @@ class Model:
                 raise _checks.value_error(f"{where}.{key}", f"unknown parameter of {kind} "
                                                             f"(expected i, j, {', '.join(required + tuple(optional))})")
         idx = self._dof_array(f"{where}.i", spec["i"], ground=False)
-        jdx = self._dof_array(f"{where}.j", spec["j"], ground=True) if spec.get("j") is not None else None
+        jspec = spec.get("j")
+        if isinstance(jspec, (str, numbers.Integral)) and not isinstance(jspec, bool):
+            jspec = [jspec] * idx.size  # one DOF (or -1, the ground) for every effect of the array
+        jdx = self._dof_array(f"{where}.j", jspec, ground=True) if jspec is not None else None
         if jdx is not None and jdx.shape != idx.shape:
             raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
         def per_effect(arg: str, value) -> np.ndarray:

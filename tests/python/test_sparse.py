@@ -278,3 +278,18 @@ def test_precise_integration_refuses_large_models_with_its_cost():
     with pytest.raises(ValueError, match=r"^scheme: PreciseIntegration is dense: for 1001 DOFs its set-up would need "
                                          r"about [0-9.]+ GB and [0-9.]+ minutes"):
         nvib.Stepper(model, nvib.PreciseIntegration(), 1e-3)
+
+
+def test_an_effect_array_takes_one_j_for_every_effect():
+    """j = -1 (the ground) or one DOF name given once means the same j for every effect of the array: the
+    same model, to the bit, as the list spelled out; a j out of range is still refused, naming it."""
+    def run(j):
+        m = nvib.Model(np.ones(4), dofs=["a", "b", "c", "d"], u0=[0.1, -0.2, 0.3, 0.0],
+                       effects=[{"type": "spring", "i": ["a", "b", "c"], "j": j, "k": [10.0, 20.0, 30.0]}])
+        return nvib.solve(m, nvib.CentralDifference(), dt=1e-3, t_end=0.5).u
+
+    assert np.array_equal(run(-1), run([-1, -1, -1]))
+    assert np.array_equal(run("d"), run(["d", "d", "d"]))
+    assert not np.array_equal(run(-1), run("d"))
+    with pytest.raises(nvib.ArgumentError, match=r"effects\[0\]\.j\[0\]"):
+        run(4)
