@@ -66,6 +66,7 @@ class EffectsPlus {
     effects_.tangent_values(u, v, t, K, C);
     if constexpr (traits::has_sparse_tangent_method<Extra>::value) extra_.tangent_values(u, v, t, K + ke_, C + ce_);
   }
+  static constexpr bool magnitude_evaluates_force = true;  // the extra force is evaluated again
   void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
     effects_.magnitude(u, v, t, out);
     extra_(u, v, t, work_);

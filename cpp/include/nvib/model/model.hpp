@@ -135,6 +135,12 @@ template <class F>
 struct has_magnitude<F, std::void_t<decltype(std::declval<F&>().magnitude(
                             std::declval<const CVecRef&>(), std::declval<const CVecRef&>(), 0.0,
                             std::declval<VecRef>()))>> : std::true_type {};
+// A force whose magnitude() evaluates the force again (a Python callable inside) says so.
+template <class F, class = void>
+struct magnitude_evaluates_force : std::false_type {};
+template <class F>
+struct magnitude_evaluates_force<F, std::void_t<decltype(F::magnitude_evaluates_force)>>
+    : std::bool_constant<F::magnitude_evaluates_force> {};
 }  // namespace traits
 
 template <class Force = NoForce>
@@ -251,6 +257,20 @@ class Model {
     }
     if (has_K_) add_abs_product(lin_->K, u, out);
     if (has_C_) add_abs_product(lin_->C, v, out);
+  }
+  // The same where the net force G = f + K u + C v at (u, v, t) is at hand: a force whose magnitude
+  // would evaluate it again (a Python callable) is not, 2 (|G| + |K||u| + |C||v|) standing for it
+  // (|f| <= |G| + |K||u| + |C||v|; the terms that cancel inside f itself are not seen, which only makes
+  // the bound stricter).
+  void force_magnitude(const CVecRef& u, const CVecRef& v, double t, const CVecRef& net, VecRef out) {
+    if constexpr (traits::has_magnitude<Force>::value && !traits::magnitude_evaluates_force<Force>::value) {
+      force_magnitude(u, v, t, out);
+    } else {
+      out = net.cwiseAbs();
+      if (has_K_) add_abs_product(lin_->K, u, out);
+      if (has_C_) add_abs_product(lin_->C, v, out);
+      out *= 2.0;
+    }
   }
 
   // ---- energy accounting ----

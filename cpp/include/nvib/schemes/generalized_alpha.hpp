@@ -250,7 +250,7 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   // the force terms (their sum cancels to the residual).
   double residual_roundoff() {
     const double am = p_.alpha_m, k = std::abs(0.5 / p_.beta - 1.0);
-    model_.force_magnitude(*ua_at_, *va_at_, ta_, G0_);
+    model_.force_magnitude(*ua_at_, *va_at_, ta_, G1_, G0_);  // G1_: the force residual() evaluated here
     w_ = (1.0 - am) * (c0_ * ((u1_ - u_).cwiseAbs() + h_ * v_.cwiseAbs()) + k * a_.cwiseAbs()) +
          std::abs(am) * a_.cwiseAbs();
     model_.mass().apply(w_, G1_);
