@@ -203,20 +203,3 @@ def test_without_takes_a_single_name():
            {"type": "constant_force", "name": "gravity", "measure": {"x": 1.0}, "value": 1.0}]
     one = nvib.Model([1.0], effects=eff, dofs=["x"], without="gravity")
     assert [e.name for e in one.effects] == ["s"]
-
-
-@pytest.mark.parametrize("part", ["K", "C"])
-@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
-def test_one_triangle_of_a_linear_part_is_refused_naming_it(part, sparse):
-    """A stiffness or damping stored as one triangle (as some programs write a symmetric matrix) would
-    be solved as another matrix: refused, naming it. A non-symmetric one with entries on both sides is
-    legitimate (follower forces, gyroscopic terms) and accepted."""
-    import scipy.sparse as sps
-
-    full = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
-    for tri in (np.triu(full), np.tril(full)):
-        with pytest.raises(nvib.ArgumentError, match=rf"^{part}: .*one triangle") as exc:
-            nvib.Model(np.ones(3), **{part: sps.csc_matrix(tri) if sparse else tri})
-        assert exc.value.argument == part
-    gyro = full + np.array([[0.0, 0.5, 0.0], [-0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
-    nvib.Model(np.ones(3), **{part: sps.csc_matrix(gyro) if sparse else gyro})

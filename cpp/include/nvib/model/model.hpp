@@ -398,19 +398,6 @@ class Model {
     A.makeCompressed();
     for (Index k = 0; k < A.nonZeros(); ++k)
       NVIB_CHECK(std::isfinite(A.valuePtr()[k]), name, "the matrix has non-finite entries");
-    // One triangle of a symmetric matrix (as some programs store it) would be solved as a very different
-    // matrix. A non-symmetric K or C is legitimate (follower forces, gyroscopic terms); a triangle is not.
-    Index above = 0, below = 0;
-    for (Index j = 0; j < A.outerSize(); ++j)
-      for (SparseMatrix::InnerIterator it(A, j); it; ++it)
-        if (it.value() != 0.0) {
-          above += it.row() < it.col();
-          below += it.row() > it.col();
-        }
-    NVIB_CHECK(above == 0 || below > 0, name,
-               "the matrix has entries above its diagonal only (one triangle): give the whole matrix");
-    NVIB_CHECK(below == 0 || above > 0, name,
-               "the matrix has entries below its diagonal only (one triangle): give the whole matrix");
     return A.nonZeros() > 0;
   }
   static SparseMatrix to_sparse(const Matrix& A, const char* name) {
