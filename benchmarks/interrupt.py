@@ -103,21 +103,27 @@ CASES = {
 DELAY = {"cpp": 0.5, "python": 0.5, "lattice": 1.5, "pim": 1.0}  # s after the run is under way
 
 
-def run_case(case: str) -> dict:
-    env = dict(os.environ)
-    p = subprocess.Popen([sys.executable, "-c", CHILD, case], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, env=env, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+def signal_child(argv: list[str], label: str, delay: float) -> tuple[dict, float, set[int]]:
+    """Starts a child, waits for its "started" line and ``delay`` more, sends SIGINT and reads the
+    JSON line it prints last: (that line, when the signal was sent, the child's processes then)."""
+    p = subprocess.Popen([sys.executable, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     line = p.stdout.readline()
-    if line.strip() != "started":
+    if not line.startswith("started"):
         p.kill()
-        raise RuntimeError(f"{case}: the child did not start: {line!r} {p.stderr.read()[-2000:]}")
-    time.sleep(DELAY[case])
+        raise RuntimeError(f"{label}: the child did not start: {line!r} {p.stderr.read()[-2000:]}")
+    time.sleep(delay)
+    workers = descendants(p.pid)
     sent = time.clock_gettime(time.CLOCK_MONOTONIC)
     p.send_signal(signal.SIGINT)
     out, err = p.communicate(timeout=600)
     if p.returncode != 0:
-        raise RuntimeError(f"{case}: exit {p.returncode}: {err[-2000:]}")
-    r = json.loads(out.strip().splitlines()[-1])
+        raise RuntimeError(f"{label}: exit {p.returncode}: {err[-2000:]}")
+    return json.loads(out.strip().splitlines()[-1]), sent, workers
+
+
+def run_case(case: str) -> dict:
+    r, sent, _ = signal_child(["-c", CHILD, case], case, DELAY[case])
     if "caught" in r:
         r["latency_s"] = r["caught"] - sent
         r["poll_s"] = r["handler"] - sent
@@ -125,6 +131,8 @@ def run_case(case: str) -> dict:
 
 
 BATCH_CHILD = os.path.join(os.path.dirname(HERE), "tests", "python", "_batch_interrupt_child.py")
+sys.path.insert(0, os.path.dirname(BATCH_CHILD))
+from _batch_interrupt_child import alive, descendants  # noqa: E402
 BATCH_CASES = {
     "serial": "40 building runs, one at a time (threads=1)",
     "threads": "40 building runs on 2 threads",
@@ -134,53 +142,13 @@ BATCH_CASES = {
 BATCH_DELAY = {"serial": 1.0, "threads": 1.0, "processes": 2.0, "dask": 3.0}  # s after "started"
 
 
-def children_of(pid: int) -> set[int]:
-    out, todo = set(), [pid]
-    while todo:
-        p = todo.pop()
-        try:
-            tasks = os.listdir(f"/proc/{p}/task")
-        except FileNotFoundError:
-            continue
-        for tid in tasks:
-            try:
-                with open(f"/proc/{p}/task/{tid}/children", encoding="utf-8") as fh:
-                    kids = [int(x) for x in fh.read().split()]
-            except (FileNotFoundError, ProcessLookupError):
-                continue
-            out.update(k for k in kids if k not in out)
-            todo.extend(kids)
-    return out
-
-
-def running(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat", encoding="utf-8") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except (FileNotFoundError, ProcessLookupError):
-        return False
-
-
 def run_batch_case(case: str) -> dict:
-    p = subprocess.Popen([sys.executable, BATCH_CHILD, case, "40"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    line = p.stdout.readline()
-    if not line.startswith("started"):
-        p.kill()
-        raise RuntimeError(f"batch {case}: the child did not start: {line!r} {p.stderr.read()[-2000:]}")
-    time.sleep(BATCH_DELAY[case])
-    workers = children_of(p.pid)
-    sent = time.clock_gettime(time.CLOCK_MONOTONIC)
-    p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=600)
-    if p.returncode != 0:
-        raise RuntimeError(f"batch {case}: exit {p.returncode}: {err[-2000:]}")
-    r = json.loads(out.strip().splitlines()[-1])
+    r, sent, workers = signal_child([BATCH_CHILD, case, "40"], f"batch {case}", BATCH_DELAY[case])
     if "caught" in r:
         r["latency_s"] = r["caught"] - sent
     time.sleep(1.0)
     r["workers"] = len(workers)
-    r["survivors"] = sum(running(w) for w in workers)
+    r["survivors"] = sum(alive(w) for w in workers)
     return r
 
 

@@ -1,7 +1,8 @@
 """A child process for the Ctrl-C tests and benchmark of solve_many: starts a batch far too long to
 finish on the path named by argv[1] (serial, threads, processes, dask), prints "started" with its pid
 and is sent SIGINT (or killed) by its parent. Prints one JSON line: when the KeyboardInterrupt reached
-Python code (the monotonic clock the parent shares) and what its ``result`` (a Batch) holds."""
+Python code (the monotonic clock the parent shares) and what its ``result`` (a Batch) holds. Also
+the parent's helpers that find the batch's worker processes and tell whether they still run."""
 
 from __future__ import annotations
 
@@ -15,6 +16,38 @@ import nvib
 
 def hardening_python(u, v, t):  # module level: it pickles, for the process path
     return 100.0 * (1.0 + 30.0 * u * u) * u
+
+
+def descendants(pid: int) -> set[int]:
+    """The processes below pid (from /proc/*/task/*/children; Linux)."""
+    out, todo = set(), [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            tasks = os.listdir(f"/proc/{p}/task")
+        except FileNotFoundError:
+            continue
+        for tid in tasks:
+            try:
+                with open(f"/proc/{p}/task/{tid}/children", encoding="utf-8") as fh:
+                    kids = [int(x) for x in fh.read().split()]
+            except (FileNotFoundError, ProcessLookupError):
+                continue
+            for k in kids:
+                if k not in out:
+                    out.add(k)
+                    todo.append(k)
+    return out
+
+
+def alive(pid: int) -> bool:
+    """pid is a process that has not ended (a zombie has)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="utf-8") as fh:
+            state = fh.read().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+    return state != "Z"
 
 
 def main() -> int:

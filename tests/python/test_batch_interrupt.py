@@ -15,6 +15,8 @@ import time
 
 import pytest
 
+from _batch_interrupt_child import alive, descendants
+
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc; POSIX signals")
 
 CHILD = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_batch_interrupt_child.py")
@@ -29,37 +31,6 @@ def start(path: str, runs: int = 40):
         p.kill()
         raise AssertionError(f"the child did not start: {line} {p.stderr.read()[-3000:]}")
     return p
-
-
-def descendants(pid: int) -> set[int]:
-    """The processes below pid (from /proc/*/task/*/children)."""
-    out, todo = set(), [pid]
-    while todo:
-        p = todo.pop()
-        try:
-            tasks = os.listdir(f"/proc/{p}/task")
-        except FileNotFoundError:
-            continue
-        for tid in tasks:
-            try:
-                with open(f"/proc/{p}/task/{tid}/children", encoding="utf-8") as fh:
-                    kids = [int(x) for x in fh.read().split()]
-            except (FileNotFoundError, ProcessLookupError):
-                continue
-            for k in kids:
-                if k not in out:
-                    out.add(k)
-                    todo.append(k)
-    return out
-
-
-def alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat", encoding="utf-8") as fh:
-            state = fh.read().rsplit(")", 1)[1].split()[0]
-    except (FileNotFoundError, ProcessLookupError):
-        return False
-    return state != "Z"
 
 
 def interrupt(p, after: float) -> tuple[dict, float, set[int]]:
