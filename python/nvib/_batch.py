@@ -15,6 +15,7 @@ import dataclasses
 import itertools
 import math
 import os
+import pickle
 
 import numpy as np
 
@@ -212,6 +213,39 @@ def _run_chunk(items, keep, options):
     return [_run_one(*item, keep, options) for item in items]
 
 
+def _python_callables(model: Model):
+    """(where, callable) for each Python callable of a model: its force and tangent, its callable laws."""
+    for key in ("force", "tangent"):
+        if getattr(model, key, None) is not None:
+            yield key, getattr(model, key)
+    for i, e in enumerate(model._init[1].get("effects") or []):
+        if isinstance(e, dict) and e.get("type") == "callable":
+            for key in ("law", "tangent"):
+                if e.get(key) is not None:
+                    yield f"effects[{i}].{key}", e[key]
+
+
+def _check_picklable(items, *, single: bool) -> None:
+    """Models that call Python run in worker processes, which get them pickled: their callables are tried
+    here, before any pool starts, so that a lambda or a function defined inside another is an error naming
+    it and what to do instead of a PicklingError out of the pool."""
+    seen = set()
+    for k, item in enumerate(items):
+        model = item[0]
+        if id(model) in seen or not model._core.has_python:
+            continue
+        seen.add(id(model))
+        for where, fn in _python_callables(model):
+            try:
+                pickle.dumps(fn)
+            except Exception as exc:  # PicklingError, AttributeError ("Can't pickle local object"), TypeError
+                name = f"{'models' if single else f'models[{k}]'}.{where}"
+                raise _checks.type_error(name, f"{getattr(fn, '__qualname__', type(fn).__name__)} cannot be pickled "
+                                               f"({exc}), and a model that calls Python runs in worker processes, "
+                                               "which need it pickled: define it with def at module level, or run "
+                                               "the models in threads (threads=1, or processes=False)") from None
+
+
 # ---- the call ----------------------------------------------------------------------------------------
 
 def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, scales=None, variations=None,
@@ -245,6 +279,8 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
         items.append((m, g, s, changes, label, sc))
     workers = max(1, int(threads) if threads is not None else (os.cpu_count() or 1))
     uses_python = any(item[0]._core.has_python for item in items)
+    if client is None and (workers > 1 or processes) and (processes if processes is not None else uses_python):
+        _check_picklable(items, single=isinstance(models, Model))
     bar = ProgressBar(enabled=bool(progress))
     results = [None] * len(items)
     try:
