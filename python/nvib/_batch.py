@@ -16,6 +16,8 @@ import itertools
 import math
 import os
 import pickle
+import signal
+from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
@@ -246,6 +248,66 @@ def _check_picklable(items, *, single: bool) -> None:
                                                "the models in threads (threads=1, or processes=False)") from None
 
 
+def _run_alone(conn, item, keep, options) -> None:
+    """In a process of its own: one run, sent back through ``conn`` as (True, result) or (False, exception)."""
+    try:
+        out = (True, _run_one(*item, keep, options))
+    except Exception as exc:
+        out = (False, exc)
+    conn.send(out)
+    conn.close()
+
+
+def _death(exitcode) -> str:
+    if exitcode is not None and exitcode < 0:
+        try:
+            return f"killed by {signal.Signals(-exitcode).name}"
+        except ValueError:
+            return f"killed by signal {-exitcode}"
+    return f"exited with status {exitcode}"
+
+
+def _rerun_apart(lost, items, keep, options, results, workers) -> None:
+    """The runs of the chunks whose worker process died (a pool loses every chunk not yet finished), each
+    made again in a process of its own, ``workers`` at a time: the run that ends its process again gets a
+    RunError saying so, the others their results."""
+    import multiprocessing as mp
+    from multiprocessing.connection import wait
+
+    ctx = mp.get_context()
+    pending = list(lost)
+    running = {}  # connection -> (run index, process)
+    try:
+        while pending or running:
+            while pending and len(running) < workers:
+                k = pending.pop(0)
+                receive, send = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_run_alone, args=(send, items[k], keep, options), daemon=True)
+                proc.start()
+                send.close()
+                running[receive] = (k, proc)
+            for conn in wait(list(running)):  # a result, or the end of a process that died before sending one
+                k, proc = running.pop(conn)
+                try:
+                    ok, out = conn.recv()
+                except (EOFError, OSError):
+                    proc.join()
+                    results[k] = RunError(items[k][4], BrokenProcessPool(
+                        f"its worker process died ({_death(proc.exitcode)}), also when the run was made again on "
+                        "its own: a force that ends the process (os._exit), a crash in Python code it calls, or "
+                        "the memory running out"))
+                    continue
+                finally:
+                    conn.close()
+                proc.join()
+                if not ok:
+                    raise out
+                results[k] = out
+    finally:
+        for _, proc in running.values():
+            proc.kill()
+
+
 # ---- the call ----------------------------------------------------------------------------------------
 
 def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, scales=None, variations=None,
@@ -262,7 +324,9 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     (default: every core); models that call Python go to as many processes instead (``processes=True``
     forces processes). ``client``: a ``dask.distributed.Client`` to send chunks of runs to (the same
     results as a local run). Other keywords go to ``solve()`` (``save_every``, ``dofs``, ``energy``, ...).
-    A failed run keeps its status and message in its own result (``Batch.failed`` lists them).
+    A failed run keeps its status and message in its own result (``Batch.failed`` lists them). When a worker
+    process dies (a force calling os._exit, a crash, the memory running out), the runs the pool lost are made
+    again each in a process of its own: one that dies again gets a RunError saying so, the others their results.
     """
     if keep not in ("history", "peaks"):
         raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
@@ -305,6 +369,9 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
                         results[k] = r
                     done += len(futures[fut])
                     bar(done, len(items))
+    except BrokenProcessPool:  # a worker process died: the pool lost every run it had not handed back
+        _rerun_apart([k for k, r in enumerate(results) if r is None], items, keep, options, results, workers)
+        bar(len(items), len(items))
     finally:
         bar.close()
     return Batch(results, labels)

@@ -2,7 +2,9 @@
 order, on threads or processes; failures stay in their own result; summaries equal what the
 history says; a Dask cluster gives the same results (skipped without dask.distributed)."""
 
+import os
 import pickle
+import signal
 
 import numpy as np
 import pytest
@@ -112,6 +114,28 @@ def test_a_callable_that_does_not_pickle_is_named_before_any_process_starts():
     for kw in (dict(threads=1), dict(threads=2, processes=False)):
         batch = nvib.solve_many([good, lam], nvib.CEMDTS(), progress=False, dt=0.01, t_end=0.1, **kw)
         assert batch.failed == []
+
+
+def exits(u, v, t):  # module level, so that it pickles: the worker running it ends
+    os._exit(3)
+
+
+def killed(u, v, t):
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
+def test_a_worker_that_dies_names_its_run_and_the_others_are_kept():
+    models = [nvib.Model([1.0], force=duffing, u0=[0.1 * k]) for k in range(8)]
+    models[2] = nvib.Model([1.0], force=exits, u0=[0.2])
+    models[5] = nvib.Model([1.0], force=killed, u0=[0.5])
+    batch = nvib.solve_many(models, nvib.CEMDTS(), threads=2, progress=False, dt=0.01, t_end=1.0)
+    assert batch.failed == [2, 5]
+    assert isinstance(batch[2], nvib.RunError) and batch[2].label["model"] == 2
+    assert "its worker process died (exited with status 3)" in batch[2].message
+    assert "its worker process died (killed by SIGKILL)" in batch[5].message
+    for k in (0, 1, 3, 4, 6, 7):
+        same(batch[k], nvib.solve(models[k], nvib.CEMDTS(), dt=0.01, t_end=1.0))
 
 
 def test_a_failed_run_keeps_its_status_and_the_others_go_on():
