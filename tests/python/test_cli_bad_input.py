@@ -185,3 +185,16 @@ def test_spectrum_output_that_cannot_be_written_exits_1(paths, tmp_path):
     out.symlink_to("/dev/full")  # every write fails: no space left on the device
     p = nvib_subprocess("spectrum", "rec.txt", "--dt", "0.01", "--periods", "0.5", "--out", out, cwd=paths["dir"])
     assert "--out: cannot write" in assert_failed_run(p, "spectrum")
+
+
+@pytest.mark.parametrize("argv, flag, needle", [
+    (["--dt", "1e-300", "--no-scipy"], "--dt", "too many steps"),
+    (["--t-end", "1e300", "--no-scipy"], "--t-end", "too many steps"),
+    (["--rtol", "1e-300"], "--rtol", "must be >= 2.3e-14"),
+])
+def test_cost_step_counts_and_tolerances_name_the_option(paths, argv, flag, needle):
+    """A step count beyond 64 bits was 'nvib cost: error: dt: ...' without the option; an rtol below
+    solve_ivp's floor ran at that floor, for as long as it took."""
+    p = nvib_subprocess("cost", "hardening", "--schemes", "newmark", *argv, cwd=paths["dir"], timeout=60)
+    assert needle in assert_bad_input(p, "cost", flag)
+    assert not list(paths["dir"].glob("cost_*"))

@@ -227,7 +227,8 @@ def _check_memory(periods, dts, t_end, exact, limit, *, rdt, record_end, accurac
         return
     need, dt, group = worst
     which = f"T = {group[0]:g} s" if group.size == 1 else f"T = {group.min():g} to {group.max():g} s"
-    cost = (f"{_steps(t_end, dt):.3g} steps of {dt:.3g} s over t_end = {t_end:g} s, whose runs would need about "
+    cost = (f"{_steps(t_end, dt):.3g} steps of {dt:.3g} s (the record's samples are {rdt:g} s apart) over "
+            f"t_end = {t_end:g} s, whose runs would need about "
             f"{need / 1e9:.3g} GB, more than the {limit / 1e9:.3g} GB they may take (half the memory available)")
     own_t_end = record_end + 2.0 * group.max()  # the run these periods need
     fits_own = _memory_needed(group.size, _steps(min(t_end, own_t_end), dt), exact) <= limit
