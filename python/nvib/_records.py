@@ -178,8 +178,8 @@ class GroundMotion:
             raise _checks.value_error("dt", f"{path} has two columns (t, a): its times are given, do not pass dt")
         bad = np.flatnonzero(np.diff(data[:, 0]) <= 0)
         if bad.size:
-            raise RecordError(path, None, f"times must increase strictly (sample {bad[0] + 2}: t = {data[bad[0] + 1, 0]!r} "
-                                          f"after {data[bad[0], 0]!r})")
+            raise RecordError(path, None, f"times must increase strictly (sample {bad[0] + 2}: "
+                                          f"t = {float(data[bad[0] + 1, 0])!r} after {float(data[bad[0], 0])!r})")
         return cls(data[:, 0], data[:, 1] * scale, name=label)
 
     @classmethod

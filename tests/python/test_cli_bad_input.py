@@ -198,3 +198,16 @@ def test_cost_step_counts_and_tolerances_name_the_option(paths, argv, flag, need
     p = nvib_subprocess("cost", "hardening", "--schemes", "newmark", *argv, cwd=paths["dir"], timeout=60)
     assert needle in assert_bad_input(p, "cost", flag)
     assert not list(paths["dir"].glob("cost_*"))
+
+
+def test_more_options_named(paths):
+    """--points beyond what a plot takes asked for terabytes (a MemoryError traceback); a library error about
+    collapse_deformation lacked its option; a record's repeated time printed numpy's np.float64(0.0)."""
+    d = paths["dir"]
+    p = nvib_subprocess("stability", "--points", "1000000000000", "--plot", d / "rho.png", cwd=d)
+    assert "must be <= 100000" in assert_bad_input(p, "stability", "--points")
+    p = nvib_subprocess("run", "hardening", "--collapse-deformation", "1e-3", cwd=d)
+    assert "effects with memory" in assert_bad_input(p, "run", "--collapse-deformation")
+    (d / "repeated.txt").write_text("0 1\n0 2\n")
+    p = nvib_subprocess("spectrum", "repeated.txt", cwd=d)
+    assert "(sample 2: t = 0.0 after 0.0)" in assert_bad_input(p, "spectrum", "record")
