@@ -15,9 +15,11 @@ import dataclasses
 import itertools
 import math
 import os
+import pickle
 import signal
 import sys
 import time
+from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
@@ -277,7 +279,7 @@ def _init_worker():
 
 def _stop_workers(pool) -> None:
     """Ask each worker process of ``pool`` to stop its run (their SIGINT handler)."""
-    for proc in list(getattr(pool, "_processes", {}).values()):
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
         try:
             os.kill(proc.pid, signal.SIGINT)
         except (ProcessLookupError, PermissionError):
@@ -285,7 +287,7 @@ def _stop_workers(pool) -> None:
 
 
 def _kill_workers(pool) -> None:
-    for proc in list(getattr(pool, "_processes", {}).values()):
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
         try:
             proc.kill()
         except (ProcessLookupError, PermissionError, AttributeError):
@@ -304,6 +306,101 @@ def _interrupted(results, labels, exc: BaseException) -> KeyboardInterrupt:
     return err
 
 
+def _python_callables(model: Model):
+    """(where, callable) for each Python callable of a model: its force and tangent, its callable laws."""
+    for key in ("force", "tangent"):
+        if getattr(model, key, None) is not None:
+            yield key, getattr(model, key)
+    for i, e in enumerate(model._init[1].get("effects") or []):
+        if isinstance(e, dict) and e.get("type") == "callable":
+            for key in ("law", "tangent"):
+                if e.get(key) is not None:
+                    yield f"effects[{i}].{key}", e[key]
+
+
+def _check_picklable(items, *, single: bool) -> None:
+    """Models that call Python run in worker processes, which get them pickled: their callables are tried
+    here, before any pool starts, so that a lambda or a function defined inside another is an error naming
+    it and what to do instead of a PicklingError out of the pool."""
+    seen = set()
+    for k, item in enumerate(items):
+        model = item[0]
+        if id(model) in seen or not model._core.has_python:
+            continue
+        seen.add(id(model))
+        for where, fn in _python_callables(model):
+            try:
+                pickle.dumps(fn)
+            except Exception as exc:  # PicklingError, AttributeError ("Can't pickle local object"), TypeError
+                name = f"{'models' if single else f'models[{k}]'}.{where}"
+                raise _checks.type_error(name, f"{getattr(fn, '__qualname__', type(fn).__name__)} cannot be pickled "
+                                               f"({exc}), and a model that calls Python runs in worker processes, "
+                                               "which need it pickled: define it with def at module level, or run "
+                                               "the models in threads (threads=1, or processes=False)") from None
+
+
+def _run_alone(conn, item, keep, options) -> None:
+    """In a process of its own: one run, sent back through ``conn`` as (True, result) or (False, exception).
+    The process is a batch worker like the pool's: it dies with its parent and stops its run on SIGINT."""
+    _init_worker()
+    try:
+        out = (True, _run_chunk([item], keep, options)[0])
+    except Exception as exc:
+        out = (False, exc)
+    conn.send(out)
+    conn.close()
+
+
+def _death(exitcode) -> str:
+    if exitcode is not None and exitcode < 0:
+        try:
+            return f"killed by {signal.Signals(-exitcode).name}"
+        except ValueError:
+            return f"killed by signal {-exitcode}"
+    return f"exited with status {exitcode}"
+
+
+def _rerun_apart(lost, items, keep, options, results, workers) -> None:
+    """The runs of the chunks whose worker process died (a pool loses every chunk not yet finished), each
+    made again in a process of its own, ``workers`` at a time: the run that ends its process again gets a
+    RunError saying so, the others their results."""
+    import multiprocessing as mp
+    from multiprocessing.connection import wait
+
+    ctx = mp.get_context()
+    pending = list(lost)
+    running = {}  # connection -> (run index, process)
+    try:
+        while pending or running:
+            while pending and len(running) < workers:
+                k = pending.pop(0)
+                receive, send = ctx.Pipe(duplex=False)
+                proc = ctx.Process(target=_run_alone, args=(send, items[k], keep, options), daemon=True)
+                proc.start()
+                send.close()
+                running[receive] = (k, proc)
+            for conn in wait(list(running)):  # a result, or the end of a process that died before sending one
+                k, proc = running.pop(conn)
+                try:
+                    ok, out = conn.recv()
+                except (EOFError, OSError):
+                    proc.join()
+                    results[k] = RunError(items[k][4], BrokenProcessPool(
+                        f"its worker process died ({_death(proc.exitcode)}), also when the run was made again on "
+                        "its own: a force that ends the process (os._exit), a crash in Python code it calls, or "
+                        "the memory running out"))
+                    continue
+                finally:
+                    conn.close()
+                proc.join()
+                if not ok:
+                    raise out
+                results[k] = out
+    finally:
+        for _, proc in running.values():
+            proc.kill()
+
+
 # ---- the call ----------------------------------------------------------------------------------------
 
 def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, scales=None, variations=None,
@@ -320,7 +417,9 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     (default: every core); models that call Python go to as many processes instead (``processes=True``
     forces processes). ``client``: a ``dask.distributed.Client`` to send chunks of runs to (the same
     results as a local run). Other keywords go to ``solve()`` (``save_every``, ``dofs``, ``energy``, ...).
-    A failed run keeps its status and message in its own result (``Batch.failed`` lists them).
+    A failed run keeps its status and message in its own result (``Batch.failed`` lists them). When a worker
+    process dies (a force calling os._exit, a crash, the memory running out), the runs the pool lost are made
+    again each in a process of its own: one that dies again gets a RunError saying so, the others their results.
     """
     if keep not in ("history", "peaks"):
         raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
@@ -337,6 +436,8 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
         items.append((m, g, s, changes, label, sc))
     workers = max(1, int(threads) if threads is not None else (os.cpu_count() or 1))
     uses_python = any(item[0]._core.has_python for item in items)
+    if client is None and (workers > 1 or processes) and (processes if processes is not None else uses_python):
+        _check_picklable(items, single=isinstance(models, Model))
     bar = ProgressBar(enabled=bool(progress))
     results = [None] * len(items)
     try:
@@ -347,6 +448,12 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
         else:
             use_processes = processes if processes is not None else uses_python
             _on_pool(use_processes, workers, items, keep, options, bar, results, labels)
+    except BrokenProcessPool:  # a worker process died: the pool lost every run it had not handed back
+        try:
+            _rerun_apart([k for k, r in enumerate(results) if r is None], items, keep, options, results, workers)
+        except KeyboardInterrupt as exc:
+            raise _interrupted(results, labels, exc) from None
+        bar(len(items), len(items))
     finally:
         bar.close()
     return Batch(results, labels)
@@ -401,6 +508,13 @@ def _on_pool(use_processes, workers, items, keep, options, bar, results, labels)
             if fut.exception() is None:
                 take(fut)
         raise _interrupted(results, labels, exc) from None
+    except BrokenProcessPool:  # keep what finished before the worker died; the caller makes the rest again
+        for fut in futures:
+            if fut.done() and not fut.cancelled() and fut.exception() is None:
+                take(fut)
+        _kill_workers(pool)
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
     except BaseException:
         if use_processes:  # no worker survives the call: one that did not stop in _STOP_WAIT is killed
             pool.shutdown(wait=False, cancel_futures=True)

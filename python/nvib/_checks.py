@@ -3,8 +3,11 @@ argument, in its message ("dt: must be > 0, got -1") and in ``.argument``."""
 
 from __future__ import annotations
 
+import errno
 import math
 import numbers
+import os
+import stat
 
 import numpy as np
 
@@ -145,3 +148,25 @@ def linear_part(name: str, x, n: int):
     if is_sparse(x):
         return sparse_matrix(name, x, n)
     return sparse.csc_matrix(matrix(name, x, n))
+
+
+def input_file_problem(path: str, kind: str, *, streams: bool = False) -> str | None:
+    """Why ``path`` cannot be read as a ``kind`` ("record file"), or None when it can: missing, a symbolic
+    link to nothing or a loop of them, a folder, a device (/dev/zero would be read for ever), or a pipe or
+    socket unless ``streams`` (a record may come from a pipe, ``<(gunzip -c rec.txt.gz)``)."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        return f"a symbolic link to {os.readlink(path)!r}, which does not exist" if os.path.islink(path) \
+            else "no such file"
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "a loop of symbolic links"
+        return f"cannot be read: {exc.strerror or exc}"
+    if stat.S_ISDIR(st.st_mode):
+        return f"is a folder, not a {kind}"
+    if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode):
+        return f"is a device, not a {kind}"
+    if not stat.S_ISREG(st.st_mode) and not streams:
+        return f"is a pipe or socket, not a {kind}"
+    return None

@@ -507,6 +507,12 @@ class Model:
         from scipy import linalg
 
         u = np.zeros(self.n) if u is None else _checks.vector("u", u, self.n)
+        if self.n > 2000:  # not tangent_matrices' own error: it names a sparse=True this method does not take
+            raise _checks.value_error("model", f"linearized_frequencies gives every frequency, from dense matrices, "
+                                               f"of models of up to 2000 DOFs (this one has {self.n}: "
+                                               f"{8e-6 * self.n ** 2:.0f} MB a matrix); for the lowest k of a larger "
+                                               "one: K, _ = model.tangent_matrices(u, v, sparse=True), then "
+                                               "scipy.sparse.linalg.eigsh(K, k, M=model.mass_sparse, sigma=0)")
         K, _ = self.tangent_matrices(u, np.zeros(self.n), 0.0)
         w2 = linalg.eigh(0.5 * (K + K.T), self.mass_matrix, eigvals_only=True)
         return np.sqrt(np.clip(w2, 0.0, None))

@@ -21,6 +21,7 @@ STANDARD_GRAVITY = 9.80665  # [m/s^2]: scale = STANDARD_GRAVITY turns an AT2 fil
 _NPTS_DT = (re.compile(r"NPTS\s*=\s*(\d+)\s*,?\s*DT\s*=\s*([-+0-9.EeDd]+)", re.IGNORECASE),  # NGA-West2
             re.compile(r"^\s*(\d+)\s+([-+0-9.EeDd]+)\s+NPTS\s*,\s*DT", re.IGNORECASE))      # older NGA
 _HEADER_LINES = 4  # an AT2 file's header: title, event, units, NPTS/DT
+MAX_RECORD_BYTES = 64 * 2**20  # a record file larger than this is refused before it is read
 
 
 class RecordError(ValueError):
@@ -47,14 +48,28 @@ def _number(path: str, line: int, text: str) -> float:
 
 
 def _read_lines(path: str) -> list[str]:
+    """The lines of a record file. What cannot be read (a folder, a loop of symbolic links, a device such
+    as /dev/zero, a file over MAX_RECORD_BYTES) is a RecordError naming the file, refused before reading."""
     path = os.fspath(path)
+    problem = _checks.input_file_problem(path, "record file", streams=True)
+    if problem:
+        raise RecordError(path, None, problem)
     try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            return fh.read().splitlines()
-    except FileNotFoundError:
-        raise RecordError(path, None, "no such file") from None
-    except IsADirectoryError:
-        raise RecordError(path, None, "is a directory, not a record file") from None
+        with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_RECORD_BYTES:
+                raise RecordError(path, None, _too_large(size))
+            raw = fh.read(MAX_RECORD_BYTES + 1)  # a pipe has no size to check beforehand
+    except OSError as exc:  # no permission to read it
+        raise RecordError(path, None, f"cannot be read: {exc.strerror or exc}") from None
+    if len(raw) > MAX_RECORD_BYTES:
+        raise RecordError(path, None, _too_large(len(raw)))
+    return raw.decode("utf-8", errors="replace").splitlines()
+
+
+def _too_large(size: int) -> str:
+    return (f"{size / 2**20:.1f} MB, more than the {MAX_RECORD_BYTES // 2**20} MB a record file may have "
+            "(some 4 million samples; a longer record can be given as an array: GroundMotion.from_array)")
 
 
 class GroundMotion:
@@ -163,8 +178,8 @@ class GroundMotion:
             raise _checks.value_error("dt", f"{path} has two columns (t, a): its times are given, do not pass dt")
         bad = np.flatnonzero(np.diff(data[:, 0]) <= 0)
         if bad.size:
-            raise RecordError(path, None, f"times must increase strictly (sample {bad[0] + 2}: t = {data[bad[0] + 1, 0]!r} "
-                                          f"after {data[bad[0], 0]!r})")
+            raise RecordError(path, None, f"times must increase strictly (sample {bad[0] + 2}: "
+                                          f"t = {float(data[bad[0] + 1, 0])!r} after {float(data[bad[0], 0])!r})")
         return cls(data[:, 0], data[:, 1] * scale, name=label)
 
     @classmethod

@@ -46,10 +46,10 @@ def scene_path(name_or_path: str) -> str:
     builtin = os.path.join(SCENE_DIR, name_or_path + ".toml")
     if not looks_like_path and os.path.isfile(builtin):
         return builtin
-    if looks_like_path or os.path.exists(name_or_path):
-        if not os.path.isfile(name_or_path):
-            what = "is a folder, not a scene file" if os.path.isdir(name_or_path) else "no such file"
-            raise FileNotFoundError(f"scene: {name_or_path!r}: {what}")
+    if looks_like_path or os.path.lexists(name_or_path):  # lexists: a broken link or a loop of them is named
+        problem = _checks.input_file_problem(name_or_path, "scene file")
+        if problem:
+            raise FileNotFoundError(f"scene: {name_or_path!r}: {problem}")
         return name_or_path
     raise _checks.value_error("scene", f"unknown scene {name_or_path!r} (built-in: {', '.join(scene_names())}; a "
                                        "scene file is named by a path such as ./my_scene.toml)")

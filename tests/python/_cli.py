@@ -14,3 +14,18 @@ def run_cli(capsys, *argv):
     out, err = capsys.readouterr()
     assert "Traceback" not in out + err
     return code, out, err
+
+
+def nvib_subprocess(*argv, cwd=None, timeout: float = 120):
+    """``python -m nvib argv`` in a subprocess that finds this nvib (source layout or installed)."""
+    import os
+    import subprocess
+    import sys
+
+    import nvib
+
+    env = dict(os.environ)
+    root = os.path.dirname(os.path.dirname(os.path.abspath(nvib.__file__)))
+    env["PYTHONPATH"] = os.pathsep.join([root] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+    return subprocess.run([sys.executable, "-m", "nvib", *map(str, argv)], capture_output=True, text=True, env=env,
+                          cwd=cwd, timeout=timeout)

@@ -2,7 +2,9 @@
 order, on threads or processes; failures stay in their own result; summaries equal what the
 history says; a Dask cluster gives the same results (skipped without dask.distributed)."""
 
+import os
 import pickle
+import signal
 
 import numpy as np
 import pytest
@@ -87,6 +89,53 @@ def test_python_models_run_in_processes():
     for m, r in zip(models, batch):
         same(r, nvib.solve(m, nvib.CEMDTS(), dt=0.01, t_end=3.0))
     assert [lab["model"] for lab in batch.labels] == [0, 1, 2]
+
+
+def test_a_callable_that_does_not_pickle_is_named_before_any_process_starts():
+    """A lambda (or a function defined inside another) cannot go to a worker process: the error names it
+    and what to do, instead of a bare PicklingError out of the pool. Threads take it as it is."""
+    good = nvib.Model([1.0], force=duffing, u0=[0.5])
+    lam = nvib.Model([1.0], force=lambda u, v, t: 4.0 * u, u0=[0.5])
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.solve_many([good, lam], nvib.CEMDTS(), threads=2, progress=False, dt=0.01, t_end=0.1)
+    assert exc.value.argument == "models[1].force"
+    assert "<lambda> cannot be pickled" in str(exc.value) and "def at module level" in str(exc.value)
+    assert "threads=1, or processes=False" in str(exc.value)
+
+    def law(d, dd, t):  # local: pickles no better than a lambda
+        return 100.0 * d
+
+    one = nvib.Model([1.0], effects=[{"type": "callable", "measure": {0: 1.0}, "law": law},
+                                     {"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 1.0,
+                                                                                "omega": 3.0}}])
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.solve_many(one, nvib.CEMDTS(), scales=[1.0, 2.0], threads=2, progress=False, dt=0.01, t_end=0.1)
+    assert exc.value.argument == "models.effects[0].law" and "law cannot be pickled" in str(exc.value)
+    for kw in (dict(threads=1), dict(threads=2, processes=False)):
+        batch = nvib.solve_many([good, lam], nvib.CEMDTS(), progress=False, dt=0.01, t_end=0.1, **kw)
+        assert batch.failed == []
+
+
+def exits(u, v, t):  # module level, so that it pickles: the worker running it ends
+    os._exit(3)
+
+
+def killed(u, v, t):
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+@pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
+def test_a_worker_that_dies_names_its_run_and_the_others_are_kept():
+    models = [nvib.Model([1.0], force=duffing, u0=[0.1 * k]) for k in range(8)]
+    models[2] = nvib.Model([1.0], force=exits, u0=[0.2])
+    models[5] = nvib.Model([1.0], force=killed, u0=[0.5])
+    batch = nvib.solve_many(models, nvib.CEMDTS(), threads=2, progress=False, dt=0.01, t_end=1.0)
+    assert batch.failed == [2, 5]
+    assert isinstance(batch[2], nvib.RunError) and batch[2].label["model"] == 2
+    assert "its worker process died (exited with status 3)" in batch[2].message
+    assert "its worker process died (killed by SIGKILL)" in batch[5].message
+    for k in (0, 1, 3, 4, 6, 7):
+        same(batch[k], nvib.solve(models[k], nvib.CEMDTS(), dt=0.01, t_end=1.0))
 
 
 def test_a_failed_run_keeps_its_status_and_the_others_go_on():

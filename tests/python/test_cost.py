@@ -129,6 +129,14 @@ def test_slow_scipy_tolerances_are_skipped_rows(hardening):
     assert "max_time" in rows[1]["message"]
 
 
+def test_a_tolerance_below_solve_ivps_floor_is_refused(hardening):
+    """solve_ivp raises an rtol below 100 machine epsilons to that floor with a warning: 1e-300 ran as
+    2.2e-14 for as long as that took (minutes with RK23)."""
+    with pytest.raises(nvib.ArgumentError) as exc:
+        nvib.cost_scipy(hardening, ["RK23"], [1e-6, 1e-300], repeats=1)
+    assert exc.value.argument == "rtols" and "got 1e-300" in str(exc.value)
+
+
 def test_cheapest_and_time_at_error():
     def row(who, label, dt, err, wall, status="success"):
         return {"contender": who, "label": label, "dt": dt, "rtol": dt, "max_error": err, "wall_time": wall,

@@ -76,6 +76,38 @@ def test_at2_errors_name_file_and_line(tmp_path):
         GroundMotion.from_at2(path)
 
 
+@pytest.mark.skipif(os.name != "posix", reason="symbolic links, /dev/zero and pipes")
+def test_files_that_cannot_be_read_are_refused_before_reading(tmp_path):
+    """A loop of symbolic links, a link to nothing, a folder and a device (/dev/zero would be read until the
+    memory runs out) are RecordErrors naming the file; a file over MAX_RECORD_BYTES is refused from its
+    size, a pipe from what it gave; a pipe that ends is read."""
+    from nvib._records import MAX_RECORD_BYTES
+
+    (tmp_path / "a").symlink_to(tmp_path / "b")
+    (tmp_path / "b").symlink_to(tmp_path / "a")
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    (tmp_path / "folder").mkdir()
+    for path, reason in ((tmp_path / "a", "a loop of symbolic links"), (tmp_path / "dangling", "which does not exist"),
+                         (tmp_path / "folder", "is a folder, not a record file"),
+                         ("/dev/zero", "is a device, not a record file")):
+        with pytest.raises(RecordError, match=reason) as exc:
+            GroundMotion.from_file(path, dt=0.01)
+        assert exc.value.path == str(path) and exc.value.line is None
+    huge = tmp_path / "huge.txt"
+    with open(huge, "wb") as fh:  # sparse: 65 MiB on paper
+        fh.write(b"0.0\n1.0\n")
+        fh.truncate(MAX_RECORD_BYTES + 2**20)
+    with pytest.raises(RecordError, match="65.0 MB, more than the 64 MB a record file may have"):
+        GroundMotion.from_file(huge, dt=0.01)
+    read, write_end = os.pipe()
+    os.write(write_end, b"0.0\n1.0\n-1.0\n")
+    os.close(write_end)
+    try:
+        assert len(GroundMotion.from_file(f"/dev/fd/{read}", dt=0.01)) == 3
+    finally:
+        os.close(read)
+
+
 # ---- plain files and arrays ----------------------------------------------------------------------
 
 def test_one_and_two_columns(tmp_path):

@@ -263,6 +263,28 @@ def test_a_history_too_large_raises_before_it_is_allocated():
     assert ok.fits and ok.saved_states == 1001 and ok.seconds_per_step > 0
 
 
+def test_linearized_frequencies_of_a_large_model_say_what_to_do():
+    """Above 2000 DOFs the error named a sparse=True that linearized_frequencies does not take (it came from
+    tangent_matrices); it names the model and the way to the lowest frequencies."""
+    model = nvib.scenes.chain(3000)
+    with pytest.raises(nvib.ArgumentError) as exc:
+        model.linearized_frequencies()
+    assert exc.value.argument == "model"
+    assert "up to 2000 DOFs (this one has 3000" in str(exc.value)
+    assert "tangent_matrices(u, v, sparse=True)" in str(exc.value) and "eigsh" in str(exc.value)
+
+
+def test_a_dense_linear_solver_on_a_large_model_of_effects_names_linear_solver():
+    """The model's forces are effects, with a sparse tangent: what is too large is the dense solver asked for,
+    not the model (whose message said to declare its forces as effects)."""
+    model = nvib.scenes.chain(3000)
+    with pytest.raises(nvib.ArgumentError) as exc:
+        nvib.solve(model, nvib.Newmark(newton=nvib.Newton(linear_solver="dense")), dt=1e-3, t_end=0.01)
+    assert exc.value.argument == "linear_solver"
+    assert "declare its forces as effects" not in str(exc.value)
+    assert "linear_solver='sparse'" in str(exc.value)
+
+
 def test_estimate_predicts_the_run():
     model = nvib.scenes.chain(2000)
     est = nvib.estimate(model, nvib.Newmark(), dt=1e-3, t_end=0.5, save_every=10, probe_seconds=0.02)

@@ -92,6 +92,42 @@ def test_arguments_named():
     assert exc.value.argument == "record"
 
 
+def test_runs_that_would_not_fit_in_memory_are_refused_naming_periods():
+    """A period so short that its step count explodes is refused before anything is allocated (it was a
+    std::bad_alloc, or gigabytes, then "dt: too many steps"), naming the argument the caller gave."""
+    gm = nvib.GroundMotion.from_array(np.sin(0.07 * np.arange(4000)), dt=0.01)  # 40 s
+    cases = [(dict(periods=[1e-6]), "periods", "T = 1e-06 s takes 2.29e+09 steps of 1.74e-08 s"),
+             (dict(periods=[1e300]), "periods", "T = 1e+300 s takes 2e+302 steps"),
+             (dict(periods=[0.1, 1e12]), "periods", "the longest period, 1e+12 s, makes t_end"),
+             (dict(periods=[0.1], t_end=1e12), "t_end", "give a shorter t_end"),
+             (dict(periods=[0.1], accuracy=1e-300), "accuracy", "must be >= 1e-09")]
+    for kw, arg, needle in cases:
+        with pytest.raises(nvib.ArgumentError) as exc:
+            nvib.spectrum(gm, **kw)
+        assert exc.value.argument == arg and needle in str(exc.value), str(exc.value)
+        assert "dt:" not in str(exc.value)
+
+
+def test_a_halving_that_would_not_fit_is_not_made(monkeypatch):
+    """The first run of T = 0.05 s misses 1e-3 and would be halved; with memory for that run but not for
+    one at half its step, the spectrum keeps the first and reports the error it reached."""
+    from nvib.analysis import spectrum as module
+
+    gm = record()
+    T, accuracy = 0.05, 1e-3
+    dt = gm.dt / math.ceil(gm.dt / (T * math.sqrt(12 * accuracy) / (2 * math.pi)))
+    need = module._memory_needed(1, (gm.t[-1] + 2 * T) / dt, True)
+    monkeypatch.setattr(module._core, "available_memory", lambda: 3.0 * need)  # a limit of 1.5 x need
+    sp = nvib.spectrum(gm, [T], accuracy=accuracy)
+    assert sp.dt[0] == pytest.approx(dt) and sp.error[0] > accuracy
+
+
+def test_a_failed_run_names_its_period():
+    gm = record().scaled(1e306)
+    with pytest.raises(nvib.DivergenceError, match=r"the run at T = 0\.5 s \(dt = [0-9.e-]+ s\) failed: diverged"):
+        nvib.spectrum(gm, [0.5, 1.0])
+
+
 def test_command_line(tmp_path, capsys):
     from nvib.cli import main
 

@@ -68,6 +68,7 @@ from .reference import FirstOrder, Reference, scale_from_peaks, reference as _re
 
 SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 SCIPY_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+SCIPY_MIN_RTOL = 2.3e-14  # solve_ivp's floor, 100 machine epsilons (as reference's DOP853 rtol)
 _JACOBIAN_METHODS = ("Radau", "BDF", "LSODA")
 FIELDS = ("contender", "scheme", "label", "dt", "rtol", "t_end", "dofs", "max_error", "energy_error", "wall_time",
           "repeats", "num_steps", "force_evals", "tangent_evals", "newton_iters", "factorizations", "status",
@@ -262,6 +263,9 @@ def cost_scipy(model: Model, methods=SCIPY_METHODS, rtols=SCIPY_RTOLS, *, t_end:
                    reverse=True)
     if not methods or not rtols:
         raise _checks.value_error("methods, rtols", "give at least one of each")
+    if rtols[-1] < SCIPY_MIN_RTOL:  # solve_ivp would raise it to that with a warning, and take as long
+        raise _checks.value_error("rtols", f"must be >= {SCIPY_MIN_RTOL:g} (solve_ivp raises a smaller one to 100 "
+                                           f"machine epsilons), got {rtols[-1]:g}")
     t_end = _t_end(model, t_end)
     cols = _dof_columns(model, dofs)
     repeats, long_run = _check_common(repeats, long_run)

@@ -5,6 +5,7 @@ parameters, its named constructors and the Newton options of the implicit ones).
 from __future__ import annotations
 
 import argparse
+import errno
 import math
 import os
 from fractions import Fraction
@@ -124,8 +125,17 @@ def check_output(arg: str, path: str, formats: tuple[str, ...]) -> None:
     ext = os.path.splitext(path)[1].lower()
     if ext not in formats:
         raise Usage(arg, f"expected a file ending in {' or '.join(formats)}, got {path!r}")
+    if os.path.isdir(path):
+        raise Usage(arg, f"{path!r} is a folder; give a file name in it")
+    try:
+        os.stat(path)
+    except OSError as exc:  # a new file is FileNotFoundError; its folder is checked below
+        if exc.errno == errno.ELOOP:
+            raise Usage(arg, f"{path!r} is a loop of symbolic links") from None
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
+        if os.path.exists(folder):
+            raise Usage(arg, f"{folder!r} is a file, not a folder")
         raise Usage(arg, f"folder {folder!r} does not exist")
     if not os.access(folder, os.W_OK):
         raise Usage(arg, f"folder {folder!r} is not writable")

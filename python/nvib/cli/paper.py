@@ -7,6 +7,7 @@ import os
 import sys
 import time
 
+from .. import _checks
 from . import _common as c
 
 
@@ -33,6 +34,13 @@ def run(args) -> int:
     out = os.path.abspath(args.outdir)
     if os.path.exists(out) and not os.path.isdir(out):
         raise c.Usage("OUTDIR", f"{args.outdir!r} exists and is not a folder")
+    if os.path.lexists(out) and not os.path.exists(out):  # a link to nothing, or a loop of links
+        raise c.Usage("OUTDIR", f"{args.outdir!r}: {_checks.input_file_problem(out, 'folder')}")
+    above = os.path.dirname(out)
+    while not os.path.exists(above):  # the folders to be made must not sit in a file ("notes.txt/figures")
+        above = os.path.dirname(above)
+    if not os.path.isdir(above):
+        raise c.Usage("OUTDIR", f"{above!r} is a file, not a folder")
     show = args.progress if args.progress is not None else c.isatty(sys.stderr)
     t0 = time.perf_counter()
 

@@ -14,7 +14,8 @@ from . import _common as c
 OUT_FORMATS = (".npz", ".csv", ".nc")
 MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
 RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
-             "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof"}
+             "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof",
+             "collapse_deformation": "--collapse-deformation", "record": "--record-effect", "energy": "--energy"}
 
 EPILOG = """\
 Scheme parameters accept fractions (--eta 1/12). Exit status: 0 success (also a structure that

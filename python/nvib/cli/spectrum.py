@@ -3,28 +3,37 @@
 from __future__ import annotations
 
 import argparse
+import math
+import sys
 
 from . import _common as c
 
 
+MAX_PERIODS = 1_000_000  # COUNT of FIRST:LAST:COUNT: each period is a run
+
+
 def periods(text: str):
-    """FIRST:LAST:COUNT (log-spaced) or a comma-separated list of periods in seconds."""
+    """FIRST:LAST:COUNT (log-spaced) or a comma-separated list of periods in seconds, each finite and > 0."""
     import numpy as np
 
     try:
         if ":" in text:
             first, last, count = text.split(":")
             lo, hi, n = float(first), float(last), int(count)
-            if not (0 < lo < hi and n >= 2):
+            if not (0 < lo < hi < math.inf and 2 <= n <= MAX_PERIODS):
                 raise ValueError
             return np.geomspace(lo, hi, n)
         values = np.array([float(x) for x in text.split(",")])
-        if values.size == 0 or not np.all(values > 0):
+        if values.size == 0 or not np.all((values > 0) & (values < math.inf)):
             raise ValueError
         return values
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected FIRST:LAST:COUNT (0 < FIRST < LAST, COUNT >= 2, log-spaced) or "
-                                         f"a list T1,T2,... of positive periods in s, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected FIRST:LAST:COUNT (0 < FIRST < LAST, 2 <= COUNT <= {MAX_PERIODS}, "
+                                         f"log-spaced) or a list T1,T2,... of finite positive periods in s, "
+                                         f"got {text!r}") from None
+
+
+FLAGS = {"periods": "--periods", "accuracy": "--accuracy", "damping": "--damping", "scheme": "--scheme"}
 
 
 def add_parser(sub) -> None:
@@ -55,7 +64,7 @@ def add_parser(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from .. import GroundMotion, RecordError, spectrum
+    from .. import GroundMotion, NvibError, RecordError, scheme_label, spectrum
 
     for z in args.damping:
         if not 0.0 <= z < 1.0:
@@ -74,7 +83,14 @@ def run(args) -> int:
     print(f"{record}")
     results = []
     for z in args.damping:
-        sp = spectrum(record, args.periods, damping=z, scheme=scheme, accuracy=args.accuracy)
+        try:
+            sp = spectrum(record, args.periods, damping=z, scheme=scheme, accuracy=args.accuracy)
+        except NvibError as exc:  # a run failed (diverged, Newton failed): its period and why
+            print(f"nvib spectrum: error: {str(exc).removeprefix('spectrum: ')} (with {scheme_label(scheme)}, "
+                  f"damping {z:g})", file=sys.stderr)
+            return 1
+        except (ValueError, TypeError) as exc:  # periods too short or too long for the memory, an accuracy too fine
+            raise c.usage_from(exc, FLAGS) from None
         results.append(sp)
         print(f"damping {z:g}: {sp.periods.size} periods, {sp.scheme}, runs {c.seconds(sp.wall_time)}, "
               f"max error of Sd {np.max(sp.error):.1e} against the {sp.check} check")
@@ -85,14 +101,20 @@ def run(args) -> int:
                          f"{sp.Sa[k]:.4g}", f"{sp.error[k]:.1e}"])
         print("\n".join("  " + line for line in c.table(rows, right=set(range(6)))))
     units = "m/s^2" if args.scale == 9.80665 else ("g" if record.units == "g" else "record units")
+    code = 0
     if args.out:
-        with open(args.out, "w", encoding="utf-8") as fh:
-            fh.write("damping,period,Sd,PSv,PSa,Sa,error,dt\n")
-            for sp in results:
-                for k in range(sp.periods.size):  # shortest round-trip decimals
-                    values = (sp.damping, sp.periods[k], sp.Sd[k], sp.PSv[k], sp.PSa[k], sp.Sa[k], sp.error[k], sp.dt[k])
-                    fh.write(",".join(repr(float(x)) for x in values) + "\n")
-        print(f"wrote {args.out}")
+        try:
+            with open(args.out, "w", encoding="utf-8") as fh:
+                fh.write("damping,period,Sd,PSv,PSa,Sa,error,dt\n")
+                for sp in results:
+                    for k in range(sp.periods.size):  # shortest round-trip decimals
+                        values = (sp.damping, sp.periods[k], sp.Sd[k], sp.PSv[k], sp.PSa[k], sp.Sa[k], sp.error[k],
+                                  sp.dt[k])
+                        fh.write(",".join(repr(float(x)) for x in values) + "\n")
+            print(f"wrote {args.out}")
+        except OSError as exc:
+            print(f"nvib spectrum: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
     if args.plot:
         import matplotlib
 
@@ -112,6 +134,11 @@ def run(args) -> int:
             ax.legend(fontsize=7)
         fig.suptitle(f"{record.name}: {results[0].scheme}, accuracy {args.accuracy:g}")
         fig.tight_layout()
-        fig.savefig(args.plot, dpi=120)
-        print(f"wrote {args.plot}")
-    return 0
+        try:
+            fig.savefig(args.plot, dpi=120)
+            print(f"wrote {args.plot}")
+        except OSError as exc:
+            print(f"nvib spectrum: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+        plt.close(fig)
+    return code

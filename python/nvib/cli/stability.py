@@ -9,6 +9,7 @@ import sys
 from . import _common as c
 
 OMEGAS = (0.1, 1.0, 2.0, 10.0, 100.0)  # where the table shows the spectral radius
+MAX_POINTS = 100_000  # --points: far more than a plot shows (1e12 asked for terabytes)
 
 
 def add_parser(sub) -> None:
@@ -63,6 +64,8 @@ def run(args) -> int:
         raise c.Usage("--omega-max", f"must be <= {hi:g}, got {args.omega_max:g}")
     if not lo <= args.omega_min < args.omega_max:
         raise c.Usage("--omega-min", f"must lie in [{lo:g}, --omega-max {args.omega_max:g}), got {args.omega_min:g}")
+    if args.points > MAX_POINTS:
+        raise c.Usage("--points", f"must be <= {MAX_POINTS} (Omega values on the plot), got {args.points}")
     if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     schemes = chosen_schemes(args)

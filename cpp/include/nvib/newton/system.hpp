@@ -98,8 +98,15 @@ class IterationSystem {
                                    "and laws on measures; not a force callable)");
     if (!sparse_possible || choice == LinearSolverChoice::dense) {
       const double mb = 16.0 * static_cast<double>(n) * static_cast<double>(n) / 1e6;
-      NVIB_CHECK(n <= Mass::kDenseMax, finite_difference ? "jacobian" : "model",
-                 finite_difference
+      // the argument to blame: the dense solver the caller asked for on a model whose tangent is sparse,
+      // the finite-difference tangent, or the model whose force gives only a dense tangent
+      const bool asked = sparse_possible && choice == LinearSolverChoice::dense;
+      NVIB_CHECK(n <= Mass::kDenseMax, asked ? "linear_solver" : finite_difference ? "jacobian" : "model",
+                 asked ? "'dense' factorises the iteration matrix as a dense " + std::to_string(n) + " x " +
+                             std::to_string(n) + " matrix (" + detail::fmt(mb) + " MB); above " +
+                             std::to_string(Mass::kDenseMax) +
+                             " DOFs use linear_solver='sparse' (or 'auto', the default: this model's tangent is sparse)"
+                 : finite_difference
                      ? "a finite-difference tangent differentiates the whole force, a dense " + std::to_string(n) +
                            " x " + std::to_string(n) + " matrix (" + detail::fmt(mb) + " MB); above " +
                            std::to_string(Mass::kDenseMax) + " DOFs use jacobian='analytic'"
