@@ -31,7 +31,7 @@ def schemes():
     out = [("lcdm", nvib.CentralDifference()), ("lcdm_half", nvib.CentralDifference(velocity="half_step")),
            ("cemdts", nvib.CEMDTS()), ("zhai", nvib.Zhai()), ("pim", nvib.PreciseIntegration())]
     for mode in ("newton", "modified", "initial", "incremental", "one_iteration"):
-        out.append((f"newmark_{mode}", nvib.Newmark(newton=nvib.Newton(mode=mode))))
+        out.append((f"newmark_{mode}", nvib.Newmark(newton=nvib.Newton(iteration=mode))))
     out.append(("galpha", nvib.GeneralizedAlpha()))
     out.append(("hht", nvib.GeneralizedAlpha.hht(-0.1)))
     out.append(("galpha_rho05_fd", nvib.GeneralizedAlpha.from_rho_inf(0.5, newton=nvib.Newton(jacobian="finite_difference"))))

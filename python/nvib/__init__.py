@@ -3,7 +3,7 @@
 Schemes: every scheme of the C++ registry (cpp/include/nvib/schemes/all.hpp),
 ``schemes()`` maps their command-line keys to the classes: CentralDifference
 (leapfrog, LCDM), CEMDTS, Zhai, Newmark, GeneralizedAlpha, PreciseIntegration
-(PIM); the implicit ones take ``newton=Newton(mode=..., rtol=..., ...)``.
+(PIM); the implicit ones take ``newton=Newton(iteration=..., rtol=..., ...)``.
 Models: ``Model(mass, ...)`` with built-in effects or Python callables.
 ``solve(model, scheme, dt=, t_end=)`` returns a Result; ``Stepper``
 integrates step by step. Tools: ``reference(model, t_end)`` (a closed form or
@@ -21,7 +21,6 @@ import os as _os
 from . import _core, _schemes
 from ._core import DEFAULT_MAX_ENERGY_ERROR
 from ._estimate import Estimate, estimate
-from ._io import save_result
 from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, DivergenceError, NvibError,
                       SingularMatrixError)
 from ._labels import scheme_label
@@ -30,6 +29,7 @@ from ._records import STANDARD_GRAVITY, GroundMotion, RecordError
 from ._batch import Batch, RunError, RunSummary, solve_many
 from ._damping import rayleigh, rayleigh_coefficients
 from ._tables import load_result
+from . import _result  # noqa: F401  (Result's Python members)
 from ._scenes import SceneError, load_scene, scene_names
 from ._schemes import Newton, schemes
 from ._solve import ENERGY_WARNING, Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
@@ -51,7 +51,7 @@ __all__ = sorted([
     "EFFECT_PARAMETERS", "Energy", "LawResponse", "drive", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
-    "plot_work_precision", "reference", "save_result", "scene_names", "scenes", "scheme_label", "schemes", "solve",
+    "plot_work_precision", "reference", "scene_names", "scenes", "scheme_label", "schemes", "solve",
     "stability",
     "time_at_error",
 ] + [cls.__name__ for cls in _schemes.scheme_classes()])

@@ -32,7 +32,7 @@ def _describe(cls) -> tuple[inspect.Signature, str]:
         lines.append(f"    {p['name']} ({p['kind']}{bounds}; default {p['default']!r}): {p['doc']}")
     if any(p["kind"] == "newton" for p in cls.parameters()):
         params.append(inspect.Parameter("iteration", inspect.Parameter.KEYWORD_ONLY, default=None))
-        lines.append("    iteration (choice): shortcut for newton=Newton(mode=iteration)")
+        lines.append("    iteration (choice): shortcut for newton=Newton(iteration=...)")
     return inspect.Signature(params), "\n".join(lines)
 
 

@@ -92,7 +92,7 @@ inline py::object range_of(const param::NewtonOptions&) { return py::none(); }
 // The previous name of a renamed parameter (None if it was never renamed).
 template <class P>
 py::object formerly_of(const P& p) {
-  if constexpr (std::is_same_v<P, param::Int>) {
+  if constexpr (std::is_same_v<P, param::Int> || std::is_same_v<P, param::Choice>) {
     if (p.formerly != nullptr) return py::str(p.formerly);
   }
   return py::none();
@@ -133,7 +133,7 @@ std::string names_of(const py::list& params, bool positional_only) {
   return s;
 }
 
-// The constructor: positional reals, then keywords; iteration= is a shortcut for newton=Newton(mode=...).
+// The constructor: positional reals, then keywords; iteration= is a shortcut for newton=Newton(iteration=...).
 template <class S>
 S construct(const py::args& args, const py::kwargs& kwargs) {
   const py::list params = describe<S>();
@@ -172,13 +172,11 @@ S construct(const py::args& args, const py::kwargs& kwargs) {
   if constexpr (nvib::has_newton<S>::value) {
     if (given.contains("iteration")) {
       if (given.contains("newton"))
-        raise_type_error("iteration", "give the mode either as iteration= or as newton=Newton(mode=...), not both");
+        raise_type_error("iteration", "give the iteration either as iteration= or as newton=Newton(iteration=...), not both");
       Newton::parameters(s.newton, [&](auto& field, const auto& p) {
         if constexpr (std::is_same_v<std::decay_t<decltype(p)>, param::Choice>) {
-          if (std::string(p.name) != "mode") return;
-          param::Choice named = p;  // errors name the shortcut
-          named.name = "iteration";
-          Convert{S::name}(field, named, given["iteration"]);
+          if (std::string(p.name) != "iteration") return;
+          Convert{S::name}(field, p, given["iteration"]);
         }
       });
     }
@@ -243,7 +241,7 @@ void bind_scheme(py::module_& m, py::list& keys) {
       .def_property_readonly("order_u", &S::order_u, "global order of accuracy of the displacement")
       .def_property_readonly("order_v", &S::order_v, "global order of accuracy of the reported velocity");
   if constexpr (nvib::has_newton<S>::value)
-    cls.def_property_readonly("iteration", [](const S& s) { return nvib::to_string(s.newton.mode); });
+    cls.def_property_readonly("iteration", [](const S& s) { return nvib::to_string(s.newton.iteration); });
   py::list factories;
   if constexpr (nvib::has_factories<S>::value) {
     S::factories([&](const char* method, const param::Real& p, S (*make)(double, Newton)) {

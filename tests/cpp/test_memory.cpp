@@ -157,7 +157,7 @@ void commits() {
   // its trial is committed as it is, checked by verify_commits and against a new trial here.
   CHECK(commits_are_trials_at_the_accepted_state(nvib::Newmark(), "Newmark") > 100);
   nvib::Newton one;
-  one.mode = nvib::NewtonMode::one_iteration;
+  one.iteration = nvib::NewtonMode::one_iteration;
   CHECK(commits_are_trials_at_the_accepted_state(nvib::Newmark(0.25, 0.5, one), "Newmark one_iteration") > 100);
   // Generalized-alpha with alpha_f != 0: Newton's last evaluation is at the alpha-point; the commit is a
   // new trial at the end of the step.
@@ -238,7 +238,7 @@ void failed_steps() {
   ga.newton = nw;
   failed_step_changes_nothing(nvib::GeneralizedAlpha(), ga, "GeneralizedAlpha, 1 iteration");
   nvib::Newton modified;
-  modified.mode = nvib::NewtonMode::modified;
+  modified.iteration = nvib::NewtonMode::modified;
   nvib::Newton modified2 = modified;
   modified2.max_iter = 2;
   failed_step_changes_nothing(nvib::Newmark(0.25, 0.5, modified), nvib::Newmark(0.25, 0.5, modified2),

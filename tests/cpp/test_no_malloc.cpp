@@ -58,7 +58,7 @@ void check_no_alloc(const char* what, const Scheme& scheme, const ModelT& model,
 
 nvib::Newton mode(nvib::NewtonMode m) {
   nvib::Newton nw;
-  nw.mode = m;
+  nw.iteration = m;
   return nw;
 }
 

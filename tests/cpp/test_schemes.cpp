@@ -109,7 +109,7 @@ void check_effects_plus_functor(const Scheme& scheme) {
 
 nvib::Newton one_iteration() {
   nvib::Newton nw;
-  nw.mode = nvib::NewtonMode::one_iteration;
+  nw.iteration = nvib::NewtonMode::one_iteration;
   return nw;
 }
 

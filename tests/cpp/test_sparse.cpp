@@ -41,7 +41,7 @@ std::vector<fx::Effect> chain(Index n) {
 
 nvib::Newton with_solver(nvib::NewtonMode mode, nvib::LinearSolverChoice c) {
   nvib::Newton nw;
-  nw.mode = mode;
+  nw.iteration = mode;
   nw.linear_solver = c;
   return nw;
 }

@@ -194,7 +194,7 @@ def test_effect_error_names_the_right_index():
     (lambda: nvib.Newton(rtol=-1.0), "rtol"),
     (lambda: nvib.Newton(atol=float("nan")), "atol"),
     (lambda: nvib.Newton(rtol=0.0, atol=0.0), "rtol"),
-    (lambda: nvib.Newton(mode="none"), "mode"),
+    (lambda: nvib.Newton(iteration="none"), "iteration"),
     (lambda: nvib.GeneralizedAlpha(alpha_f=0.6), "alpha_f"),
     (lambda: nvib.GeneralizedAlpha(alpha_m=0.0, alpha_f=0.0, beta=0.0), "beta"),
     (lambda: nvib.GeneralizedAlpha(alpha_m=0.0, alpha_f=0.0, gamma=0.4), "gamma"),
@@ -243,11 +243,11 @@ def test_scheme_parameter_round_trip():
     assert (hht.alpha_m, hht.alpha_f, hht.beta, hht.gamma) == pytest.approx((0.0, 0.1, 0.3025, 0.6))
     wbz = nvib.GeneralizedAlpha.wbz(-0.1)
     assert (wbz.alpha_m, wbz.alpha_f, wbz.beta, wbz.gamma) == pytest.approx((-0.1, 0.0, 0.3025, 0.6))
-    nw = nvib.Newton(mode="modified", max_iter=7, rtol=1e-8, atol=1e-9, jacobian="finite_difference")
+    nw = nvib.Newton(iteration="modified", max_iter=7, rtol=1e-8, atol=1e-9, jacobian="finite_difference")
     nm = nvib.Newmark(0.3, 0.6, newton=nw)
     assert (nm.beta, nm.gamma, nm.iteration, nm.newton.max_iter, nm.newton.rtol, nm.newton.atol,
             nm.newton.jacobian) == (0.3, 0.6, "modified", 7, 1e-8, 1e-9, "finite_difference")
-    assert nm.newton == nw and nvib.Newmark(0.3, 0.6, iteration="modified").newton == nvib.Newton(mode="modified")
+    assert nm.newton == nw and nvib.Newmark(0.3, 0.6, iteration="modified").newton == nvib.Newton(iteration="modified")
     assert nvib.CEMDTS().eta == 0.45 and nvib.Zhai().psi == 0.5 and nvib.Zhai().phi == 0.5
     pim = nvib.PreciseIntegration()
     assert (pim.squarings, pim.interpolation, pim.corrections) == (20, 2, 1)

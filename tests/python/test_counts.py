@@ -145,7 +145,7 @@ def test_full_newton_counts(name, kind):
 @pytest.mark.parametrize("kind", MODEL_KINDS)
 @pytest.mark.parametrize("name", list(IMPLICIT))
 def test_modified_newton_counts(name, kind):
-    s = stats_of(kind, IMPLICIT[name](newton=nvib.Newton(mode="modified", max_iter=100)))
+    s = stats_of(kind, IMPLICIT[name](newton=nvib.Newton(iteration="modified", max_iter=100)))
     iters = s.num_newton_iters
     assert iters > 2 * N
     assert s.num_factorizations == N

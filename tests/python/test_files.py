@@ -143,7 +143,7 @@ def _hardening_newton_fails():
     """One Newton iteration with tolerances no step meets: fails at step 1 with two residuals."""
     model = nvib.Model([1.0], effects=[{"type": "hardening_spring", "measure": {"x": 1.0}, "k0": 100.0, "a": 30.0}],
                        dofs=["x"], u0=[1.5])
-    return nvib.solve(model, nvib.Newmark(newton=nvib.Newton(mode="newton", max_iter=1, rtol=1e-15, atol=1e-15)),
+    return nvib.solve(model, nvib.Newmark(newton=nvib.Newton(iteration="newton", max_iter=1, rtol=1e-15, atol=1e-15)),
                       dt=0.01, t_end=0.1, throw=False)
 
 

@@ -402,7 +402,7 @@ def constructors(cls) -> list:
     params = {p["name"]: p for p in cls.parameters()}
     newton = [p for p in params.values() if p["kind"] == "newton"]
     shortcut = [{"name": "iteration", "kind": "choice", "default": "newton",
-                 "range": next(q["range"] for q in nvib.Newton.parameters() if q["name"] == "mode")}] if newton else []
+                 "range": next(q["range"] for q in nvib.Newton.parameters() if q["name"] == "iteration")}] if newton else []
     out = [(cls, list(params.values()) + shortcut)]
     for f in cls.factories():
         real = {"name": f["parameter"], "kind": "real", "default": 0.0, "range": (-1.0, 1.0, False, False)}

@@ -47,8 +47,8 @@ def test_recorded_internal_variables_are_the_law_driven_along_the_run(case, name
 FAILING = [
     # (id, scheme): Newton allowed too few iterations for a yielding step
     ("Newmark-newton-1_iteration", nvib.Newmark(newton=nvib.Newton(max_iter=1))),
-    ("Newmark-modified-2_iterations", nvib.Newmark(newton=nvib.Newton(mode="modified", max_iter=2))),
-    ("Newmark-initial-2_iterations", nvib.Newmark(newton=nvib.Newton(mode="initial", max_iter=2))),
+    ("Newmark-modified-2_iterations", nvib.Newmark(newton=nvib.Newton(iteration="modified", max_iter=2))),
+    ("Newmark-initial-2_iterations", nvib.Newmark(newton=nvib.Newton(iteration="initial", max_iter=2))),
     ("GeneralizedAlpha-1_iteration", nvib.GeneralizedAlpha(newton=nvib.Newton(max_iter=1))),
     ("HHT-1_iteration", nvib.GeneralizedAlpha.hht(-0.1, newton=nvib.Newton(max_iter=1))),
 ]
@@ -57,7 +57,7 @@ FAILING = [
 def _enough(sch):
     """The same scheme with Newton's defaults (20 iterations)."""
     if isinstance(sch, nvib.Newmark):
-        return nvib.Newmark(newton=nvib.Newton(mode=sch.newton.mode))
+        return nvib.Newmark(newton=nvib.Newton(iteration=sch.newton.iteration))
     return nvib.GeneralizedAlpha(sch.alpha_m, sch.alpha_f, sch.beta, sch.gamma)
 
 
@@ -100,7 +100,7 @@ def test_a_failed_step_leaves_every_internal_variable(sch):
     # the fresh stepper's tangent is the one at the restored state (the storeys yielding), the run's the
     # one at t = 0 (elastic), so the two agree to Newton's tolerance, not bit for bit.
     good.step(k) if k > 0 else None
-    if sch.newton.mode == "initial":
+    if sch.newton.iteration == "initial":
         np.testing.assert_allclose(good.state(), before, rtol=0, atol=1e-8 * np.abs(before).max())
     else:
         np.testing.assert_array_equal(good.state(), before)

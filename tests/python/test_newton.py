@@ -43,9 +43,9 @@ IMPLICIT = {
 
 
 def make(name, iteration="newton", **newton):
-    """The scheme ``name`` with nvib.Newton(mode=iteration, **newton)."""
+    """The scheme ``name`` with nvib.Newton(iteration=iteration, **newton)."""
     p = IMPLICIT[name]
-    nw = nvib.Newton(mode=iteration, **newton)
+    nw = nvib.Newton(iteration=iteration, **newton)
     if p["cls"] == "newmark":
         return nvib.Newmark(p["beta"], p["gamma"], newton=nw)
     return nvib.GeneralizedAlpha(p["am"], p["af"], p["beta"], p["gamma"], newton=nw)

@@ -34,24 +34,25 @@ def hardening(tangent_factor: float = 1.0) -> nvib.Model:
 # ---------------------------------------------------------------- the options object
 
 def test_newton_options_are_one_validated_object():
-    n = nvib.Newton(mode="modified", rtol=1e-8, max_iter=50)
-    assert (n.mode, n.rtol, n.max_iter, n.atol, n.jacobian) == ("modified", 1e-8, 50, 1e-12, "analytic")
-    assert repr(n) == "Newton(mode='modified', max_iter=50, rtol=1e-08)"
+    n = nvib.Newton(iteration="modified", rtol=1e-8, max_iter=50)
+    assert (n.iteration, n.rtol, n.max_iter, n.atol, n.jacobian) == ("modified", 1e-8, 50, 1e-12, "analytic")
+    assert repr(n) == "Newton(iteration='modified', max_iter=50, rtol=1e-08)"
     assert pickle.loads(pickle.dumps(n)) == n and n != nvib.Newton()
     s = nvib.Newmark(newton=n)
     assert s.newton == n and s.iteration == "modified"
-    assert nvib.Newmark(iteration="initial").newton == nvib.Newton(mode="initial")
+    assert nvib.Newmark(iteration="initial").newton == nvib.Newton(iteration="initial")
 
 
 @pytest.mark.parametrize("make, argument, text", [
     (lambda: nvib.Newton(rtol=-1.0), "rtol", r"Newton needs rtol >= 0"),
     (lambda: nvib.Newton(max_iter=0), "max_iter", r"Newton needs 1 <= max_iter <= 1000, got 0"),
     (lambda: nvib.Newton(rtol=0.0, atol=0.0), "rtol, atol", r"at least one tolerance"),
-    (lambda: nvib.Newton(mode="none"), "mode", r"'none' is now 'one_iteration'"),
+    (lambda: nvib.Newton(iteration="none"), "iteration", r"'none' is now 'one_iteration'"),
     (lambda: nvib.Newmark(iteration="none"), "iteration", r"'none' is now 'one_iteration'"),
-    (lambda: nvib.Newton(mode="fast"), "mode", r"expected 'newton', 'modified', 'initial', 'incremental' or "
+    (lambda: nvib.Newton(iteration="fast"), "iteration", r"expected 'newton', 'modified', 'initial', 'incremental' or "
                                                 r"'one_iteration', got 'fast'"),
     (lambda: nvib.Newmark(iteration="modified", newton=nvib.Newton()), "iteration", r"not both"),
+    (lambda: nvib.Newton(mode="modified"), "mode", r"renamed iteration in Newton .*give iteration=modified"),
     (lambda: nvib.Newmark(rtol=1e-8), "rtol", r"unknown parameter of Newmark \(expected beta, gamma, newton\)"),
     (lambda: nvib.Newmark(newton={"rtol": 1e-8}), "newton", r"expected nvib.Newton"),
     (lambda: nvib.Newton(1e-8), "Newton", r"takes at most 0 positional arguments"),
@@ -90,7 +91,7 @@ def test_converged_steps_report_at_most_rtol(mode):
     """With a tolerance above the round-off of the residual every accepted step is below it; at the
     default 1e-10 a step may end at that round-off instead (8 eps times the terms that cancel in it)."""
     for cls in implicit_classes():
-        res = nvib.solve(hardening(), cls(newton=nvib.Newton(mode=mode, rtol=1e-7)), dt=1e-3, t_end=0.3)
+        res = nvib.solve(hardening(), cls(newton=nvib.Newton(iteration=mode, rtol=1e-7)), dt=1e-3, t_end=0.3)
         assert res.success and res.max_residual <= 1e-7, (cls, mode, res.max_residual)
         assert nvib.solve(hardening(), cls(iteration=mode), dt=1e-3, t_end=0.3).success
 

@@ -119,5 +119,5 @@ def test_the_helpers_follow_the_registry():
     assert set(scheme_variants(explicit=True)) | set(scheme_variants(explicit=False)) == set(ids)
     assert all(key in nvib.schemes() for key in VARIANTS)
     nm = with_newton(nvib.Newmark(0.3, 0.6, iteration="modified"), jacobian="finite_difference")
-    assert nm == nvib.Newmark(0.3, 0.6, newton=nvib.Newton(mode="modified", jacobian="finite_difference"))
+    assert nm == nvib.Newmark(0.3, 0.6, newton=nvib.Newton(iteration="modified", jacobian="finite_difference"))
     assert with_newton(nvib.CEMDTS(0.2), max_iter=3) == nvib.CEMDTS(0.2)

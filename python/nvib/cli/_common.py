@@ -152,7 +152,7 @@ def scheme_options() -> dict[str, dict]:
     """option name -> {kind, doc, bounds, choices, where ('param' | 'newton' | 'factory'), schemes: [keys]},
     generated from the registry: every scheme parameter, every named constructor (its flag is its
     parameter for from_<parameter>, its own name otherwise) and, for the implicit schemes, the Newton
-    options (the mode as --iteration)."""
+    options (Newton's iteration as --iteration)."""
     from .. import Newton, schemes
 
     options: dict[str, dict] = {}
@@ -165,7 +165,7 @@ def scheme_options() -> dict[str, dict]:
         for p in cls.parameters():
             if p["kind"] == "newton":
                 for q in Newton.parameters():
-                    add("iteration" if q["name"] == "mode" else q["name"], dict(q, where="newton"), key)
+                    add(q["name"], dict(q, where="newton", formerly=None), key)  # the command line never had --mode
             else:
                 add(p["name"], dict(p, where="param"), key)
         for f in cls.factories():
@@ -215,7 +215,7 @@ def make_scheme(key: str, args, *, only_applicable: bool = False):
     params = {n: v for n, v in given.items() if options[n]["where"] == "param"}
     newton = {n: v for n, v in given.items() if options[n]["where"] == "newton" and n != "iteration"}
     factory = [n for n in given if options[n]["where"] == "factory"]
-    flags = {n: flag(n) for n in options} | {"mode": "--iteration", "newton": "--iteration"}
+    flags = {n: flag(n) for n in options} | {"newton": "--iteration"}
     for f in factory:
         flags[f] = flag(f)
     if len(factory) > 1 or (factory and params):
@@ -224,7 +224,7 @@ def make_scheme(key: str, args, *, only_applicable: bool = False):
     try:
         kw = {}
         if newton or "iteration" in given:
-            kw["newton"] = Newton(**newton, **({"mode": given["iteration"]} if "iteration" in given else {}))
+            kw["newton"] = Newton(**newton, **({"iteration": given["iteration"]} if "iteration" in given else {}))
         if factory:
             return getattr(cls, options[factory[0]]["method"])(given[factory[0]], **kw)
         return cls(**params, **kw)

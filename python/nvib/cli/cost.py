@@ -70,7 +70,7 @@ def cost_scheme(text: str):
     if cls.is_explicit:
         raise c.Usage("--schemes", f"{text!r}: only the implicit schemes take a Newton mode")
     try:
-        return cls(newton=Newton(mode=mode))
+        return cls(newton=Newton(iteration=mode))
     except ValueError as exc:
         raise c.Usage("--schemes", f"{text!r}: {exc}") from None
 

@@ -90,6 +90,12 @@ struct Choice {
   const char* doc;
   std::array<const char*, kMax> names{};
   int count = 0;
+  const char* formerly = nullptr;  // the parameter's previous name, refused with a message naming the new one
+  Choice renamed_from(const char* old) const {
+    Choice r = *this;
+    r.formerly = old;
+    return r;
+  }
   const char* operator[](int k) const { return k >= 0 && k < count ? names[static_cast<size_t>(k)] : "?"; }
   int index_of(const std::string& s) const {
     for (int k = 0; k < count; ++k)

@@ -68,7 +68,7 @@ class NewtonSolver {
     p.predict(x);
     p.update(x);
     const bool linear = p.linear();
-    if (!linear && opt_.mode == NewtonMode::incremental) return incremental(p, model, x, t, step, st);
+    if (!linear && opt_.iteration == NewtonMode::incremental) return incremental(p, model, x, t, step, st);
     bool du_small = false, du_settled = false;
     for (int k = 0;; ++k) {
       const Residual res = p.residual(r_);
@@ -103,7 +103,7 @@ class NewtonSolver {
       if (linear) {
         refactor = !factorized_;
       } else {
-        switch (opt_.mode) {
+        switch (opt_.iteration) {
           case NewtonMode::newton: refactor = true; break;
           case NewtonMode::modified:
           case NewtonMode::one_iteration: refactor = k == 0; break;
@@ -112,7 +112,7 @@ class NewtonSolver {
         }
       }
       if (refactor) {
-        const IterationMatrix im = opt_.mode == NewtonMode::initial && !linear ? p.start_matrix() : p.matrix();
+        const IterationMatrix im = opt_.iteration == NewtonMode::initial && !linear ? p.start_matrix() : p.matrix();
         const Status s = factorize(p, model, im, t, step, st);
         if (s != Status::success) return s;
       }
@@ -121,7 +121,7 @@ class NewtonSolver {
       du_small = du_norm <= opt_.atol + 1e-3 * opt_.rtol * x_norm;
       du_settled = du_norm <= opt_.atol + 100.0 * opt_.rtol * x_norm;
       if (linear) return Status::success;  // in equilibrium after one solve, up to round-off
-      if (opt_.mode == NewtonMode::one_iteration) return accept_unchecked(p, t, step);
+      if (opt_.iteration == NewtonMode::one_iteration) return accept_unchecked(p, t, step);
     }
   }
 

@@ -51,11 +51,11 @@ inline const char* to_string(Jacobian j) { return j == Jacobian::analytic ? "ana
 struct Newton {
   static constexpr const char* name = "Newton";
   static constexpr const char* doc =
-      "Options of the Newton iteration of the implicit schemes: mode ('newton', 'modified', 'initial', "
+      "Options of the Newton iteration of the implicit schemes: iteration ('newton', 'modified', 'initial', "
       "'incremental' or 'one_iteration'), max_iter, rtol (relative to the force scale of the step), atol "
       "(force units), jacobian ('analytic' or 'finite_difference') and linear_solver ('auto', 'dense' or "
       "'sparse'; Stats.linear_solver says which was used).";
-  NewtonMode mode = NewtonMode::newton;
+  NewtonMode iteration = NewtonMode::newton;  // the equilibrium iteration (its mode)
   int max_iter = 20;
   double rtol = 1e-10;  // relative to the force scale of the step
   double atol = 1e-12;  // absolute, in force units
@@ -64,8 +64,9 @@ struct Newton {
 
   template <class Self, class V>
   static void parameters(Self& s, V&& v) {
-    v(s.mode, param::choice("mode", "equilibrium iteration", {"newton", "modified", "initial", "incremental",
-                                                                "one_iteration"}));
+    v(s.iteration, param::choice("iteration", "equilibrium iteration",
+                                 {"newton", "modified", "initial", "incremental", "one_iteration"})
+                       .renamed_from("mode"));
     v(s.max_iter, param::integer("max_iter", "iterations allowed per step").range(1, 1000));
     v(s.rtol, param::real("rtol", "residual tolerance relative to the force scale of the step").at_least(0.0));
     v(s.atol, param::real("atol", "absolute residual tolerance, in force units").at_least(0.0));
@@ -78,7 +79,7 @@ struct Newton {
     NVIB_CHECK(rtol > 0.0 || atol > 0.0, "rtol, atol", "at least one tolerance must be > 0");
   }
   // The modes that accept a step without an equilibrium check.
-  bool accepts_unconverged() const { return mode == NewtonMode::incremental || mode == NewtonMode::one_iteration; }
+  bool accepts_unconverged() const { return iteration == NewtonMode::incremental || iteration == NewtonMode::one_iteration; }
 };
 
 }  // namespace nvib

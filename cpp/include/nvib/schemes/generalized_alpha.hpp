@@ -114,7 +114,7 @@ struct GeneralizedAlpha {
   // Second order exactly when gamma = 1/2 - alpha_m + alpha_f (Chung & Hulbert 1993), except in the
   // incremental format, first order on nonlinear models (its linearisation error is never corrected).
   int order_u() const {
-    return std::abs(gamma - (0.5 - alpha_m + alpha_f)) < 1e-12 && newton.mode != NewtonMode::incremental ? 2 : 1;
+    return std::abs(gamma - (0.5 - alpha_m + alpha_f)) < 1e-12 && newton.iteration != NewtonMode::incremental ? 2 : 1;
   }
   int order_v() const { return order_u(); }
   template <class M>

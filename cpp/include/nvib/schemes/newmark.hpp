@@ -57,7 +57,7 @@ struct Newmark {
   }
   // The incremental format is first order on nonlinear models: the
   // linearisation error of each step, O(h^2), is carried and never corrected.
-  int order_u() const { return std::abs(gamma - 0.5) < 1e-12 && newton.mode != NewtonMode::incremental ? 2 : 1; }
+  int order_u() const { return std::abs(gamma - 0.5) < 1e-12 && newton.iteration != NewtonMode::incremental ? 2 : 1; }
   int order_v() const { return order_u(); }
   template <class M>
   using stepper = NewmarkStepper<M>;

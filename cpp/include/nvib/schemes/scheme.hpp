@@ -88,10 +88,10 @@ std::string scheme_repr(const S& s) {
   return std::string(S::name) + "(" + w.out + ")";
 }
 
-// "Newton(mode='modified')": the mode and the options that differ from the defaults.
+// "Newton(iteration='modified')": the iteration and the options that differ from the defaults.
 inline std::string newton_repr(const Newton& n) {
   const Newton d;
-  std::string s = std::string("Newton(mode='") + to_string(n.mode) + "'";
+  std::string s = std::string("Newton(iteration='") + to_string(n.iteration) + "'";
   if (n.max_iter != d.max_iter) s += ", max_iter=" + std::to_string(n.max_iter);
   if (n.rtol != d.rtol) s += ", rtol=" + detail::repr(n.rtol);
   if (n.atol != d.atol) s += ", atol=" + detail::repr(n.atol);
@@ -109,7 +109,7 @@ void detail::ReprWriter<S>::operator()(const Newton& x, const param::NewtonOptio
 template <class S>
 std::string scheme_label(const S& s, bool with_iteration = true) {
   if constexpr (has_newton<S>::value)
-    if (with_iteration) return s.label() + " (" + to_string(s.newton.mode) + ")";
+    if (with_iteration) return s.label() + " (" + to_string(s.newton.iteration) + ")";
   return s.label();
 }
 
