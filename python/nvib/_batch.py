@@ -29,7 +29,7 @@ from ._model import Model
 from ._progress import ProgressBar
 from ._records import GroundMotion
 from ._core import StopToken
-from ._solve import Status, solve
+from ._solve import Status, check_option_names, solve
 
 __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
 
@@ -423,6 +423,7 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     """
     if keep not in ("history", "peaks"):
         raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
+    check_option_names(options, also=("t0", "u0", "v0"))  # before any run: each would fail the same way
     runs = _expand(models, ground_motions, scales, variations)
     schemes = list(scheme) if isinstance(scheme, (list, tuple)) else [scheme] * len(runs)
     if len(schemes) != len(runs):

@@ -17,14 +17,14 @@ from ._core import ArgumentError, ArgumentTypeError
 def value_error(name: str, what: str) -> ArgumentError:
     """ArgumentError (a ValueError) "<name>: <what>" with .argument = name."""
     exc = ArgumentError(f"{name}: {what}")
-    exc.argument = name
+    exc.argument, exc.reason = name, what
     return exc
 
 
 def type_error(name: str, what: str) -> ArgumentTypeError:
     """ArgumentTypeError (a TypeError) "<name>: <what>" with .argument = name."""
     exc = ArgumentTypeError(f"{name}: {what}")
-    exc.argument = name
+    exc.argument, exc.reason = name, what
     return exc
 
 
@@ -40,6 +40,17 @@ def real(name: str, x, *, positive: bool = False) -> float:
     if positive and x <= 0.0:
         raise value_error(name, f"must be > 0, got {x}")
     return x
+
+
+def number(name: str, x) -> float:
+    """A real number converted to a float, its value unchecked: for the values the C++ core checks itself
+    (a time step, a time), so that each check and its message live in one place."""
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        raise type_error(name, f"expected a real number, got {type(x).__name__}")
+    try:
+        return float(x)
+    except OverflowError:  # an integer too large for a double
+        raise value_error(name, "must be finite, got an integer too large for a double") from None
 
 
 def integer(name: str, x, *, minimum: int | None = None, maximum: int | None = 2**63 - 1) -> int:

@@ -2,6 +2,7 @@
 # classes are generated from the C++ registry (cpp/include/nvib/schemes/all.hpp):
 # they share the interface of _Scheme and are reached through SCHEMES or
 # module attributes; the other types are declared here.
+import os
 from enum import Enum
 from typing import Any, Callable, ClassVar, Sequence
 
@@ -13,9 +14,11 @@ DEFAULT_MAX_ENERGY_ERROR: float
 
 class ArgumentError(ValueError):
     argument: str | None
+    reason: str | None
 
 class ArgumentTypeError(TypeError):
     argument: str | None
+    reason: str | None
 
 class Status(Enum):
     success = 0
@@ -36,6 +39,7 @@ class Stats:
     num_linear_solves: int
     num_expm: int
     wall_time: float
+    linear_solver: str
     def as_dict(self) -> dict[str, float]: ...
 
 class StopToken:
@@ -56,13 +60,13 @@ class Failure:
     message: str
 
 class Newton:
-    mode: str
+    iteration: str
     max_iter: int
     rtol: float
     atol: float
     jacobian: str
     accepts_unconverged: bool
-    def __init__(self, *, mode: str = ..., max_iter: int = ..., rtol: float = ..., atol: float = ...,
+    def __init__(self, *, iteration: str = ..., max_iter: int = ..., rtol: float = ..., atol: float = ...,
                  jacobian: str = ...) -> None: ...
     @staticmethod
     def parameters() -> list[dict[str, Any]]: ...
@@ -102,6 +106,7 @@ class Result:
     v: Array
     a: Array
     energy: Energy | None
+    effects: dict[str, dict[str, Any]]
     dofs: list[str]
     dof_indices: list[int]
     stats: Stats
@@ -112,6 +117,14 @@ class Result:
     max_residual: float | None
     scheme: _Scheme
     dt: float
+    # the Python members (nvib/_result.py)
+    relative_to_ground: bool
+    units: list[str]
+    warnings: list[str]
+    absolute_a: Array
+    def to_pandas(self) -> Any: ...
+    def to_xarray(self) -> Any: ...
+    def save(self, path: str | os.PathLike[str], extra: dict[str, Any] | None = ...) -> None: ...
 
 class Effect:
     type: str
@@ -168,13 +181,13 @@ class Stepper:
     def step(self) -> tuple[Status, Failure | None]: ...
     def state(self) -> Array: ...
     def set_state(self, t: float, x: Array) -> None: ...
-    def integrate(self, t_end: float, save_every: int = ..., dofs: Sequence[int] = ..., max_displacement: float = ...,
-                  energy: bool = ..., max_energy_error: float = ...,
-                  progress: Callable[[int, int], None] | None = ...) -> Result: ...
+    def integrate(self, t_end: float, options: dict[str, Any],
+                  progress: Callable[[int, int], None] | None) -> Result: ...
+
+RUN_DEFAULTS: dict[str, Any]
 
 def solve(model: Model, scheme: _Scheme, dt: float, t_end: float, t0: float, u0: Array, v0: Array,
-          save_every: int = ..., dofs: Sequence[int] = ..., max_displacement: float = ..., energy: bool = ...,
-          max_energy_error: float = ..., progress: Callable[[int, int], None] | None = ...) -> Result: ...
+          options: dict[str, Any], progress: Callable[[int, int], None] | None) -> Result: ...
 def expm(A: Array, squarings: int = ...) -> Array: ...
 def steps_to_reach(t0: float, t_end: float, dt: float) -> int: ...
 def default_max_displacement(u: Array, v: Array, duration: float) -> float: ...

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from . import _checks, _core
 from ._errors import NvibError
 from ._model import Model
+from ._solve import RUN_OPTIONS
 
 
 @dataclass(frozen=True)
@@ -41,8 +42,9 @@ class Estimate:
         return "\n".join(lines)
 
 
-def estimate(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, save_every: int = 1, dofs=None,
-             energy: bool = False, probe_seconds: float = 0.05) -> Estimate:
+def estimate(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0,
+             save_every: int = RUN_OPTIONS["save_every"], dofs=RUN_OPTIONS["dofs"],
+             energy: bool = RUN_OPTIONS["energy"], probe_seconds: float = 0.05) -> Estimate:
     """The memory and time of ``solve(model, scheme, dt=dt, t_end=t_end, save_every=..., dofs=..., energy=...)``
     without making it: the history's bytes from the counts, the time from a probe of the first steps
     (about ``probe_seconds`` of them, at most the whole run) on a Stepper."""
@@ -50,11 +52,10 @@ def estimate(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, 
 
     if not isinstance(model, Model):
         raise _checks.type_error("model", f"expected nvib.Model, got {type(model).__name__}")
-    dt = _checks.real("dt", dt, positive=True)
-    t0, t_end = _checks.real("t0", t0), _checks.real("t_end", t_end)
+    dt, t0, t_end = _checks.number("dt", dt), _checks.number("t0", t0), _checks.number("t_end", t_end)
     save_every = _checks.integer("save_every", save_every, minimum=1)
     probe_seconds = _checks.real("probe_seconds", probe_seconds, positive=True)
-    steps = _core.steps_to_reach(t0, t_end, dt)
+    steps = _core.steps_to_reach(t0, t_end, dt)  # checks dt, t0 and t_end
     saved = steps // save_every + 1 + (1 if steps % save_every else 0)
     m = len(_dof_indices(model, dofs)) or model.n
     t_start = time.perf_counter()

@@ -1,4 +1,4 @@
-"""Saving a Result: .npz (everything, compressed) or .csv (the histories as columns)."""
+"""Writing a Result (through ``Result.save``): .npz (everything, compressed) or .csv (the histories as columns)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ import numpy as np
 from . import _checks
 from ._solve import ground_a
 
-FORMATS = (".npz", ".csv")
+FORMATS = (".npz", ".csv", ".nc")  # what Result.save writes (.nc through xarray, in _tables)
 
 
-def save_result(path: str, result, extra: dict | None = None) -> None:
-    """Writes ``result`` to ``path`` by its extension.
+def write(path: str, result, extra: dict | None = None) -> None:
+    """Writes ``result`` to ``path`` by its extension (``Result.save``, which also writes .nc).
 
     .npz: t, u, v, a, dofs, status, scheme, dt, the stats counters, energy_* columns
     (if recorded), ground_a (under a ground motion: the ground's acceleration at each saved DOF, what
@@ -29,7 +29,8 @@ def save_result(path: str, result, extra: dict | None = None) -> None:
     elif ext == ".csv":
         _write_csv(path, result)
     else:
-        raise _checks.value_error("path", f"expected a file ending in {' or '.join(FORMATS)}, got {path!r}")
+        endings = f"{', '.join(FORMATS[:-1])} or {FORMATS[-1]}"
+        raise _checks.value_error("path", f"expected a file ending in {endings}, got {path!r}")
 
 
 def failure_fields(failure) -> dict:

@@ -364,7 +364,7 @@ class Model:
             return _core.EffectArray(kind, idx, jdx if jdx is not None else np.empty(0, dtype=np.int32), params,
                                      self.n, name=name, **signal)
         except ArgumentError as exc:  # names the parameter or entry: make it effects[i].<it>
-            raise _checks.value_error(f"{where}.{exc.argument}", str(exc).split(": ", 1)[1]) from None
+            raise _checks.value_error(f"{where}.{exc.argument}", exc.reason) from None
 
     def _dof_array(self, where: str, values, *, ground: bool) -> np.ndarray:
         """DOF indices (int32) from integers or DOF names; -1 (the ground) where ``ground``."""
@@ -430,7 +430,7 @@ class Model:
         try:
             return _core.Effect(kind, index, coef, params, name=name, **signal)
         except ArgumentError as exc:  # names the parameter: make it effects[i].<parameter>
-            raise _checks.value_error(f"{where}.{exc.argument}", str(exc).split(": ", 1)[1]) from None
+            raise _checks.value_error(f"{where}.{exc.argument}", exc.reason) from None
 
     @property
     def effects(self) -> list | None:

@@ -5,6 +5,8 @@ owns the stepping, saving, divergence and energy checks, counters and defaults."
 from __future__ import annotations
 
 import contextlib
+import difflib
+import inspect
 import math
 
 import numpy as np
@@ -78,20 +80,6 @@ def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
     return res
 
 
-Result._ground = property(lambda self: _extras(self).get("ground"))
-Result.relative_to_ground = property(
-    lambda self: bool(_extras(self).get("relative_to_ground", False)),
-    doc="True when the model moves on a shaking ground: u, v and a are then relative to the ground "
-        "(``absolute_a`` adds the ground's acceleration back)")
-Result.units = property(
-    lambda self: unit_list(_extras(self).get("units", "m"), len(self.dofs)),
-    doc="the unit of each saved DOF's displacement (the model's ``units``; time is in s)")
-Result.warnings = property(
-    lambda self: list(_extras(self).get("warnings", ())),
-    doc="what a run that did not fail still wants said, e.g. an energy balance error above "
-        "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
-
-
 def ground_a(res: Result) -> np.ndarray | None:
     """The ground's acceleration at the saved DOFs and times, (n_saved, n_saved_dofs): what ``absolute_a``
     adds to ``a``. None when the model has no ground motion, and when it is not known: a result read from a
@@ -109,7 +97,7 @@ def ground_a(res: Result) -> np.ndarray | None:
     return out
 
 
-def _absolute_a(self) -> np.ndarray:
+def absolute_a(self) -> np.ndarray:
     """Absolute accelerations of the saved DOFs, a + r a_g(t) for each ground acceleration of the model
     (its displacements, velocities and accelerations are relative to the ground); ``a`` itself when the
     model has no ground motion. A result read from a file that holds a relative to the ground but not the
@@ -124,9 +112,6 @@ def _absolute_a(self) -> np.ndarray:
                                                 "acceleration (no ground_a: written before nvib saved it), so the "
                                                 "absolute accelerations cannot be rebuilt; solve again to have them")
     return self.a
-
-
-Result.absolute_a = property(_absolute_a)
 
 
 def _energy_repr(self) -> str:
@@ -196,19 +181,66 @@ def _record(model: Model, record) -> list[str]:
     return names
 
 
-def _run_options(model: Model, save_every, dofs, max_displacement, progress, energy, max_energy_error,
-                 record=None, collapse_deformation=None, stop_at_collapse=True) -> dict:
+# The options of a run, as solve(), Stepper.integrate() and solve_many() take them by keyword: name ->
+# default. The loop's own defaults come from the C++ SolveOptions (RUN_DEFAULTS: None where the loop
+# derives the value from the run, such as the divergence bound); the others exist only in Python.
+RUN_OPTIONS = {
+    "save_every": _core.RUN_DEFAULTS["save_every"],
+    "dofs": None,
+    "throw": True,
+    "max_displacement": _core.RUN_DEFAULTS["max_displacement"],
+    "progress": None,
+    "energy": _core.RUN_DEFAULTS["energy"],
+    "max_energy_error": _core.RUN_DEFAULTS["max_energy_error"],
+    "warn_energy_error": ENERGY_WARNING,
+    "record": None,
+    "collapse_deformation": _core.RUN_DEFAULTS["collapse_deformation"],
+    "stop_at_collapse": _core.RUN_DEFAULTS["stop_at_collapse"],
+}
+
+
+def check_option_names(options: dict, *, also=()) -> None:
+    """Refuse a keyword that is not an option of a run (nor one of ``also``), naming it and the closest."""
+    for key in options:
+        if key not in RUN_OPTIONS and key not in also:
+            close = difflib.get_close_matches(key, [*RUN_OPTIONS, *also], n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else f" (the options are {', '.join(RUN_OPTIONS)})"
+            raise _checks.type_error(key, f"not an option of a run{hint}")
+
+
+def _run_options(model: Model, given: dict) -> tuple[dict, object, bool, float]:
+    """The options of a run from the caller's keywords: (the C++ loop's options, progress, throw,
+    warn_energy_error). Types are converted and Python's own options checked; the loop checks the rest."""
+    check_option_names(given)
+    o = {**RUN_OPTIONS, **given}
+    progress = o["progress"]
     if progress is not None and not callable(progress):
         raise _checks.type_error("progress", "expected a callable progress(step, n_steps)")
-    if not isinstance(energy, bool):
-        raise _checks.type_error("energy", f"expected True or False, got {type(energy).__name__}")
-    return dict(save_every=_checks.integer("save_every", save_every, minimum=1), dofs=_dof_indices(model, dofs),
-                max_displacement=_limit("max_displacement", max_displacement), energy=energy,
-                max_energy_error=_limit("max_energy_error", max_energy_error), progress=progress,
-                record=_record(model, record),
-                collapse_deformation=math.nan if collapse_deformation is None else
-                _checks.real("collapse_deformation", collapse_deformation, positive=True),
-                stop_at_collapse=_checks.boolean("stop_at_collapse", stop_at_collapse))
+    if not isinstance(o["energy"], bool):
+        raise _checks.type_error("energy", f"expected True or False, got {type(o['energy']).__name__}")
+    core = dict(save_every=_checks.integer("save_every", o["save_every"], minimum=1),
+                dofs=_dof_indices(model, o["dofs"]),
+                max_displacement=_limit("max_displacement", o["max_displacement"]), energy=o["energy"],
+                max_energy_error=_limit("max_energy_error", o["max_energy_error"]),
+                record=_record(model, o["record"]),
+                collapse_deformation=math.nan if o["collapse_deformation"] is None else
+                _checks.real("collapse_deformation", o["collapse_deformation"], positive=True),
+                stop_at_collapse=_checks.boolean("stop_at_collapse", o["stop_at_collapse"]))
+    return core, progress, _checks.boolean("throw", o["throw"]), _warning_level(o["warn_energy_error"])
+
+
+def _with_options(*fixed: inspect.Parameter):
+    """The signature a function taking ``**options`` shows (help, inspect): its own parameters, then
+    every option of a run with its default."""
+    options = [inspect.Parameter(k, inspect.Parameter.KEYWORD_ONLY, default=v) for k, v in RUN_OPTIONS.items()]
+
+    def decorate(f):
+        f.__signature__ = inspect.Signature([*fixed, *options], return_annotation="Result")
+        return f
+    return decorate
+
+
+_P = inspect.Parameter
 
 
 class Stepper:
@@ -219,8 +251,8 @@ class Stepper:
         _check_model(model)
         self.model = model
         self.scheme = scheme
-        self.dt = _checks.real("dt", dt, positive=True)
-        t0 = _checks.real("t0", t0)
+        self.dt = _checks.number("dt", dt)  # dt and t0 are checked by the C++ stepper
+        t0 = _checks.number("t0", t0)
         u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
         v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
         self._st = _core.Stepper(model._core, scheme, self.dt)
@@ -266,17 +298,13 @@ class Stepper:
             if failure is not None:
                 raise error_for(failure)
 
-    def integrate(self, t_end: float, *, save_every: int = 1, dofs=None, throw: bool = True,
-                  max_displacement: float | None = None, progress=None, energy: bool = False,
-                  max_energy_error: float | None = None, warn_energy_error: float = ENERGY_WARNING,
-                  record=None, collapse_deformation: float | None = None, stop_at_collapse: bool = True) -> Result:
+    @_with_options(_P("self", _P.POSITIONAL_OR_KEYWORD), _P("t_end", _P.POSITIONAL_OR_KEYWORD))
+    def integrate(self, t_end: float, **options) -> Result:
         """Continue to t_end and return the saved history of this stretch (options as in ``solve``)."""
-        t_end = _checks.real("t_end", t_end)
-        opts = _run_options(self.model, save_every, dofs, max_displacement, progress, energy, max_energy_error,
-                            record, collapse_deformation, stop_at_collapse)
-        warn = _warning_level(warn_energy_error)
+        t_end = _checks.number("t_end", t_end)  # checked by the C++ loop
+        opts, progress, throw, warn = _run_options(self.model, options)
         with _partial_annotated(self.model, warn):
-            res = _annotate(self._st.integrate(t_end, **opts), self.model, warn)
+            res = _annotate(self._st.integrate(t_end, opts, progress), self.model, warn)
         if throw and not res.success and res.status != Status.collapsed:
             raise error_for(res.failure, res)
         return res
@@ -294,11 +322,10 @@ def default_max_displacement(u, v, duration: float) -> float:
     return _core.default_max_displacement(u, v, _checks.real("duration", duration))
 
 
-def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
-          save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
-          progress=None, energy: bool = False, max_energy_error: float | None = None,
-          warn_energy_error: float = ENERGY_WARNING, record=None, collapse_deformation: float | None = None,
-          stop_at_collapse: bool = True) -> Result:
+@_with_options(_P("model", _P.POSITIONAL_OR_KEYWORD), _P("scheme", _P.POSITIONAL_OR_KEYWORD),
+               _P("dt", _P.KEYWORD_ONLY), _P("t_end", _P.KEYWORD_ONLY), _P("t0", _P.KEYWORD_ONLY, default=0.0),
+               _P("u0", _P.KEYWORD_ONLY, default=None), _P("v0", _P.KEYWORD_ONLY, default=None))
+def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None, **options) -> Result:
     """Integrate ``model`` with ``scheme`` from t0 to t_end in steps of dt.
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. A
@@ -338,16 +365,12 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     ``Result.warnings`` names the effect), unless ``stop_at_collapse=False``.
     """
     _check_model(model)
-    dt = _checks.real("dt", dt, positive=True)
-    t0 = _checks.real("t0", t0)
-    t_end = _checks.real("t_end", t_end)
+    dt, t0, t_end = _checks.number("dt", dt), _checks.number("t0", t0), _checks.number("t_end", t_end)  # C++ checks
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
-    opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error, record,
-                        collapse_deformation, stop_at_collapse)
-    warn = _warning_level(warn_energy_error)
+    opts, progress, throw, warn = _run_options(model, options)
     with _partial_annotated(model, warn):
-        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
+        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, opts, progress), model, warn)
     if throw and not res.success and res.status != Status.collapsed:
         raise error_for(res.failure, res)
     return res

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _checks
 from ._core import ArgumentError, Failure, Result, Stats, Status
-from ._io import effect_arrays, effect_columns, failure_fields, save_result
+from ._io import effect_arrays, effect_columns, failure_fields, write
 from ._model import rate_unit
 from ._solve import ground_a
 
@@ -90,14 +90,17 @@ def to_xarray(self):
     return ds
 
 
-def save(self, path) -> None:
-    """Write the result by the extension of ``path``: .npz (everything), .csv (the histories as columns, in
-    shortest round-trip decimals) or .nc (netCDF, through xarray)."""
+def save(self, path, extra: dict | None = None) -> None:
+    """Write the result by the extension of ``path``: .npz (everything, and the ``extra`` entries: a
+    scene's name, the run's settings), .csv (the histories as columns, in shortest round-trip decimals) or
+    .nc (netCDF, through xarray). The one way a result is written (the command line's --out too)."""
     path = os.fspath(path)
     if path.lower().endswith(".nc"):
+        if extra:
+            raise _checks.value_error("extra", "only an .npz file holds extra entries")
         to_xarray(self).to_netcdf(path, engine=_netcdf_engine())
     else:
-        save_result(path, self)
+        write(path, self, extra)
 
 
 def _netcdf_engine() -> str:
@@ -341,7 +344,3 @@ def load_result(path) -> Result:
         return _load_nc(path)
     raise _checks.value_error("path", f"expected a file ending in .npz or .nc, got {path!r}")
 
-
-Result.to_pandas = to_pandas
-Result.to_xarray = to_xarray
-Result.save = save

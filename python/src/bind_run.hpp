@@ -150,26 +150,46 @@ void keeping_partial(std::unique_ptr<PyResult>& out, F&& f) {
   }
 }
 
-inline SolveOptions solve_options(std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
-                                  bool energy, double max_energy_error, std::vector<std::string> record,
-                                  double collapse_deformation, bool stop_at_collapse) {
+// A run's options from the keywords Python passes (nvib._solve.RunOptions): SolveOptions' own defaults
+// for those not given, so that each default is written once, in SolveOptions. Values are converted here;
+// the loop checks them.
+inline SolveOptions solve_options(const py::dict& given) {
   SolveOptions opt;
-  opt.record = std::move(record);
-  opt.collapse_deformation = collapse_deformation;
-  opt.stop_at_collapse = stop_at_collapse;
-  opt.save_every = save_every;
-  opt.dofs = std::move(dofs);
-  opt.max_displacement = max_displacement;
-  opt.energy = energy;
-  opt.max_energy_error = max_energy_error;
-  opt.throw_on_failure = false;
+  for (auto item : given) {
+    const std::string key = py::str(item.first);
+    const py::handle v = item.second;
+    if (key == "save_every") opt.save_every = v.cast<std::int64_t>();
+    else if (key == "dofs") opt.dofs = v.cast<std::vector<Index>>();
+    else if (key == "max_displacement") opt.max_displacement = v.cast<double>();
+    else if (key == "energy") opt.energy = v.cast<bool>();
+    else if (key == "max_energy_error") opt.max_energy_error = v.cast<double>();
+    else if (key == "record") opt.record = v.cast<std::vector<std::string>>();
+    else if (key == "collapse_deformation") opt.collapse_deformation = v.cast<double>();
+    else if (key == "stop_at_collapse") opt.stop_at_collapse = v.cast<bool>();
+    else raise_type_error(key, "not an option of a run");
+  }
+  opt.throw_on_failure = false;  // Python raises from the failure, with the partial result
   opt.keep_partial = true;
   return opt;
 }
 
+// The defaults of the options a Python caller may give (None: the loop's own default, NaN in C++).
+inline py::dict run_defaults() {
+  const SolveOptions d;
+  auto none_if_nan = [](double x) { return std::isnan(x) ? py::object(py::none()) : py::object(py::float_(x)); };
+  py::dict out;
+  out["save_every"] = d.save_every;
+  out["max_displacement"] = none_if_nan(d.max_displacement);
+  out["energy"] = d.energy;
+  out["max_energy_error"] = none_if_nan(d.max_energy_error);
+  out["collapse_deformation"] = none_if_nan(d.collapse_deformation);
+  out["stop_at_collapse"] = d.stop_at_collapse;
+  return out;
+}
+
 inline void bind_run(py::module_& m) {
-  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
   m.attr("DEFAULT_MAX_ENERGY_ERROR") = nvib::kDefaultMaxEnergyError;
+  m.attr("RUN_DEFAULTS") = run_defaults();
   m.def("available_memory", &nvib::available_memory_bytes, "bytes of memory available now (0 if unknown)");
   m.def("history_bytes", &nvib::history_bytes, py::arg("states"), py::arg("dofs"), py::arg("energy"),
         "bytes of a saved history of that many states and DOFs");
@@ -179,11 +199,8 @@ inline void bind_run(py::module_& m) {
   m.def(
       "solve",
       [](PyModel& model, py::object scheme, double dt, double t_end, double t0, const Vector& u0, const Vector& v0,
-         std::int64_t save_every, std::vector<Index> dofs, double max_displacement, bool energy,
-         double max_energy_error, py::object progress, std::vector<std::string> record, double collapse_deformation,
-         bool stop_at_collapse) {
-        SolveOptions opt = solve_options(save_every, std::move(dofs), max_displacement, energy, max_energy_error,
-                                         std::move(record), collapse_deformation, stop_at_collapse);
+         const py::dict& options, py::object progress) {
+        SolveOptions opt = solve_options(options);
         opt.t0 = t0;
         auto result = std::make_unique<PyResult>();
         result->scheme = scheme;
@@ -192,8 +209,8 @@ inline void bind_run(py::module_& m) {
         with_scheme(scheme, "scheme", [&](const auto& sc) {
           model.visit([&](auto& md) {
             PyObserver obs{progress, !model.python()};
-            RunBound bound(std::isnan(max_displacement) ? nvib::default_max_displacement(u0, v0, t_end - t0)
-                                                        : max_displacement);
+            RunBound bound(std::isnan(opt.max_displacement) ? nvib::default_max_displacement(u0, v0, t_end - t0)
+                                                            : opt.max_displacement);
             keeping_partial(result, [&] {
               return interruptible(model.python(), [&] { return nvib::solve(md, sc, dt, t_end, u0, v0, opt, obs); });
             });
@@ -203,10 +220,7 @@ inline void bind_run(py::module_& m) {
         return result;
       },
       py::arg("model"), py::arg("scheme"), py::arg("dt"), py::arg("t_end"), py::arg("t0"), py::arg("u0"),
-      py::arg("v0"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
-      py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
-      py::arg("progress") = py::none(), py::arg("record") = std::vector<std::string>{},
-      py::arg("collapse_deformation") = nan, py::arg("stop_at_collapse") = true,
+      py::arg("v0"), py::arg("options"), py::arg("progress"),
       "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end; NaN limits mean the defaults.");
 
   py::class_<AnyStepper>(m, "Stepper", "Step-by-step integration; one thread at a time.")
@@ -248,30 +262,21 @@ inline void bind_run(py::module_& m) {
            py::arg("t"), py::arg("x"))
       .def(
           "integrate",
-          [](AnyStepper& s, double t_end, std::int64_t save_every, std::vector<Index> dofs, double max_displacement,
-             bool energy, double max_energy_error, py::object progress, std::vector<std::string> record,
-             double collapse_deformation, bool stop_at_collapse) {
+          [](AnyStepper& s, double t_end, const py::dict& options, py::object progress) {
             Exclusive x(s);
             auto result = std::make_unique<PyResult>();
             result->scheme = s.scheme;
             result->dt = s.dt();
             result->names = s.dofs;
             keeping_partial(result, [&] {
-              return s.integrate(t_end, solve_options(save_every, std::move(dofs), max_displacement, energy,
-                                                      max_energy_error, std::move(record), collapse_deformation,
-                                                      stop_at_collapse),
-                                 std::move(progress));
+              return s.integrate(t_end, solve_options(options), std::move(progress));
             });
             return result;
           },
-          py::arg("t_end"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
-          py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
-          py::arg("progress") = py::none(), py::arg("record") = std::vector<std::string>{},
-          py::arg("collapse_deformation") = nan, py::arg("stop_at_collapse") = true);
+          py::arg("t_end"), py::arg("options"), py::arg("progress"));
 
   m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,
         "Matrix exponential by the 2^N algorithm of the precise integration method.");
-  m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"));
   m.def("default_max_displacement", &nvib::default_max_displacement, py::arg("u"), py::arg("v"), py::arg("duration"));
 }
 

@@ -16,22 +16,24 @@ namespace nvib_py {
 
 namespace py = pybind11;
 
-// Sets the Python error `type_name` of nvib._core (ArgumentError or
-// ArgumentTypeError) with its message and .argument.
-inline void set_argument_error(const char* type_name, const std::string& argument, const std::string& message) {
+// Sets the Python error `type_name` of nvib._core (ArgumentError or ArgumentTypeError), whose message
+// is "<argument>: <reason>", with .argument and .reason (so that a caller naming the argument otherwise,
+// such as effects[2].k for k, keeps the reason without taking the message apart).
+inline void set_argument_error(const char* type_name, const std::string& argument, const std::string& reason) {
   py::object cls = py::module_::import("nvib._core").attr(type_name);
-  py::object exc = cls(message);
+  py::object exc = cls(argument + ": " + reason);
   exc.attr("argument") = argument;
+  exc.attr("reason") = reason;
   PyErr_SetObject(cls.ptr(), exc.ptr());
 }
 // Raises ArgumentTypeError: "<argument>: <what>".
 [[noreturn]] inline void raise_type_error(const std::string& argument, const std::string& what) {
-  set_argument_error("ArgumentTypeError", argument, argument + ": " + what);
+  set_argument_error("ArgumentTypeError", argument, what);
   throw py::error_already_set();
 }
 // Raises ArgumentError (a ValueError): "<argument>: <what>".
 [[noreturn]] inline void raise_value_error(const std::string& argument, const std::string& what) {
-  set_argument_error("ArgumentError", argument, argument + ": " + what);
+  set_argument_error("ArgumentError", argument, what);
   throw py::error_already_set();
 }
 
@@ -131,13 +133,14 @@ inline void bind_types(py::module_& m) {
     py::object cls = py::reinterpret_steal<py::object>(
         PyErr_NewExceptionWithDoc((std::string("nvib._core.") + name).c_str(), doc, base, nullptr));
     cls.attr("argument") = py::none();
+    cls.attr("reason") = py::none();
     m.attr(name) = cls;
   }
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const nvib::ArgumentError& e) {
-      set_argument_error("ArgumentError", e.argument(), e.what());
+      set_argument_error("ArgumentError", e.argument(), e.reason());
     }
   });
 

@@ -10,8 +10,9 @@ import time
 from collections import Counter
 
 from . import _common as c
+from .._io import FORMATS
 
-OUT_FORMATS = (".npz", ".csv", ".nc")
+OUT_FORMATS = FORMATS
 MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
 RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
              "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof",
@@ -193,14 +194,10 @@ def write_out(res, model, t_end: float, save_every: int, args) -> bool:
     """Writes --out (the whole or the partial history); False, with the error on stderr, if it cannot."""
     import numpy as np
 
-    from .. import save_result
-
-    try:
-        if args.out.lower().endswith(".nc"):
-            res.save(args.out)  # netCDF through xarray (checked to be there before the run)
-        else:
-            save_result(args.out, res, {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
-                                        "without": np.array(list(args.without or []), dtype=str)})
+    extra = {"scene": model.scene["name"], "t_end": t_end, "save_every": save_every,
+             "without": np.array(list(args.without or []), dtype=str)}
+    try:  # netCDF goes through xarray (checked to be there before the run) and holds no extra entries
+        res.save(args.out, None if args.out.lower().endswith(".nc") else extra)
     except OSError as exc:
         print(f"nvib run: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
         return False

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -21,11 +22,12 @@ namespace nvib {
 class ArgumentError : public std::invalid_argument {
  public:
   ArgumentError(std::string argument, const std::string& what)
-      : std::invalid_argument(argument + ": " + what), argument_(std::move(argument)) {}
+      : std::invalid_argument(argument + ": " + what), argument_(std::move(argument)), reason_(what) {}
   const std::string& argument() const { return argument_; }
+  const std::string& reason() const { return reason_; }  // the message without "<argument>: "
 
  private:
-  std::string argument_;
+  std::string argument_, reason_;
 };
 
 namespace detail {
@@ -89,3 +91,13 @@ class SingularMatrixError : public Error { using Error::Error; };
   do {                                                               \
     if (!(condition)) ::nvib::detail::throw_argument((argument), (what)); \
   } while (0)
+
+namespace nvib {
+
+// The one check of a time step and of a start time, wherever one is given (a Stepper, a run's step count).
+inline void check_time_step(double dt) {
+  NVIB_CHECK(std::isfinite(dt) && dt > 0.0, "dt", "the time step must be finite and > 0, got " + detail::fmt(dt));
+}
+inline void check_start_time(double t0) { NVIB_CHECK(std::isfinite(t0), "t0", "the initial time must be finite"); }
+
+}  // namespace nvib

@@ -27,7 +27,7 @@ template <class ModelT>
 class StepperBase {
  public:
   StepperBase(ModelT model, double h) : model_(std::move(model)), h_(h) {
-    NVIB_CHECK(std::isfinite(h) && h > 0.0, "dt", "the time step must be finite and > 0, got " + detail::fmt(h));
+    check_time_step(h);
     const Index n = model_.size();
     u_.setZero(n);
     v_.setZero(n);
@@ -107,7 +107,7 @@ class StepperBase {
 
   void check_initial(double t0, const Vector& u0, const Vector& v0) const {
     const Index n = model_.size();
-    NVIB_CHECK(std::isfinite(t0), "t0", "the initial time must be finite");
+    check_start_time(t0);
     NVIB_CHECK(u0.size() == n, "u0", "expected " + std::to_string(n) + " entries, got " + std::to_string(u0.size()));
     NVIB_CHECK(v0.size() == n, "v0", "expected " + std::to_string(n) + " entries, got " + std::to_string(v0.size()));
     NVIB_CHECK(u0.allFinite(), "u0", "the initial displacement has non-finite entries");

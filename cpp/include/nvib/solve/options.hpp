@@ -111,8 +111,9 @@ inline double default_max_displacement(const Vector& u, const Vector& v, double 
 // Number of steps to reach t_end: t_end/dt rounded when it is an integer up
 // to round-off, else rounded up (the run then ends at the first multiple of dt past t_end).
 inline std::int64_t steps_to_reach(double t0, double t_end, double dt) {
+  check_start_time(t0);
   NVIB_CHECK(std::isfinite(t_end), "t_end", "must be finite");
-  NVIB_CHECK(std::isfinite(dt) && dt > 0.0, "dt", "the time step must be finite and > 0, got " + detail::fmt(dt));
+  check_time_step(dt);
   NVIB_CHECK(t_end > t0, "t_end", "must be > t0 (" + detail::fmt(t0) + "), got " + detail::fmt(t_end));
   const double r = (t_end - t0) / dt;
   NVIB_CHECK(r < 9.0e15, "dt", "too many steps (t_end - t0)/dt = " + detail::fmt(r));
