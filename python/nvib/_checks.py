@@ -104,7 +104,10 @@ def real_array(name: str, x) -> np.ndarray:
         raise value_error(name, f"expected a regular array of real numbers ({exc})") from None
     if a.dtype.kind in "iuf":
         return a.astype(float, copy=False)
-    if a.dtype.kind == "O":
+    if a.dtype.kind == "O":  # mixed entries: each must be a real number (not a string, a Decimal, a bool, None)
+        for x in a.flat:
+            if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
+                raise type_error(name, f"expected real numbers, got an entry {x!r} of type {type(x).__name__}")
         try:
             return a.astype(float)
         except (TypeError, ValueError, OverflowError) as exc:

@@ -63,3 +63,17 @@ def test_a_record_signal_refuses_an_unknown_key_in_a_scene_a_model_and_the_comma
     message = refused(nvib.ArgumentError, "effects[0].signal.amplitud", nvib.Model, [1.0], effects=[
         {"type": "ground_acceleration", "signal": {"kind": "sine", "amplitud": 1.0, "omega": 2.0}}])
     assert "did you mean 'amplitude'" in message
+
+
+# ---- the arrays' entries -----------------------------------------------------------------------------
+
+def test_arrays_of_objects_must_hold_real_numbers():
+    message = refused(TypeError, "mass", nvib.Model, np.array([Decimal(1), "2"], dtype=object))
+    assert "Decimal" in message
+    refused(TypeError, "mass", nvib.Model, [1.0, "2"])
+    refused(TypeError, "u0", nvib.Model, [1.0, 1.0], u0=[0.0, "1"])
+    refused(TypeError, "K", nvib.Model, [1.0], K=np.array([[Decimal(2)]], dtype=object))
+    refused(TypeError, "v0", nvib.solve, oscillator(), nvib.Newmark(), dt=0.01, t_end=0.1, v0=[True])
+    from fractions import Fraction
+
+    assert nvib.Model(np.array([Fraction(1, 2), 1], dtype=object)).mass_matrix[0, 0] == 0.5  # real numbers are fine
