@@ -77,3 +77,21 @@ def test_arrays_of_objects_must_hold_real_numbers():
     from fractions import Fraction
 
     assert nvib.Model(np.array([Fraction(1, 2), 1], dtype=object)).mass_matrix[0, 0] == 0.5  # real numbers are fine
+# ---- Rayleigh damping --------------------------------------------------------------------------------
+
+def test_rayleigh_refuses_non_finite_frequencies_negative_coefficients_and_a_second_application():
+    base = two_storeys()
+    refused(nvib.ArgumentError, "omegas", nvib.rayleigh, base, zeta=0.05, omegas=[10.0, math.inf])
+    refused(nvib.ArgumentError, "omegas", nvib.rayleigh_coefficients, 0.05, [math.nan, 10.0])
+    refused(nvib.ArgumentError, "alpha", nvib.rayleigh, base, alpha=-0.1)
+    refused(nvib.ArgumentError, "beta", nvib.rayleigh, base, alpha=0.1, beta=-1e-3)
+    # 0.1 at 1 rad/s and 0.005 at 10 rad/s need beta < 0: every mode above 14.1 rad/s damped negatively
+    message = refused(nvib.ArgumentError, "zeta", nvib.rayleigh, base, zeta=[0.1, 0.005], omegas=[1.0, 10.0])
+    assert "beta = -0.0010101" in message and "above 14.11 rad/s" in message and "negatively" in message
+    message = refused(nvib.ArgumentError, "zeta", nvib.rayleigh_coefficients, [0.01, 0.2], [1.0, 10.0])
+    assert "alpha = " in message and "below" in message
+    damped = nvib.rayleigh(base, zeta=0.05, omegas=[10.0, 40.0])
+    message = refused(nvib.ArgumentError, "model", nvib.rayleigh, damped, zeta=0.05, omegas=[10.0, 40.0])
+    assert "already has Rayleigh damping" in message
+    # a model derived from a damped one (a batch's variation) keeps its damping and its record of it
+    assert damped._rebuilt().rayleigh == damped.rayleigh
