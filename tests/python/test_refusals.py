@@ -95,3 +95,38 @@ def test_rayleigh_refuses_non_finite_frequencies_negative_coefficients_and_a_sec
     assert "already has Rayleigh damping" in message
     # a model derived from a damped one (a batch's variation) keeps its damping and its record of it
     assert damped._rebuilt().rayleigh == damped.rayleigh
+
+
+# ---- spectrum and ida --------------------------------------------------------------------------------
+
+def _record():
+    t = np.arange(300) * 0.01
+    return GroundMotion.from_array(np.sin(7 * t) * np.exp(-0.5 * t), dt=0.01, name="r")
+
+
+@pytest.mark.parametrize("halvings, exc", [(-1, ValueError), (1.5, TypeError), ("2", TypeError)])
+def test_spectrum_max_halvings_must_be_a_non_negative_integer(halvings, exc):
+    refused(exc, "max_halvings", nvib.spectrum, _record(), [0.5], max_halvings=halvings)
+
+
+def test_a_spectrum_whose_error_is_not_finite_misses_its_accuracy(monkeypatch):
+    first = nvib.spectrum(_record(), [0.5], max_halvings=2)
+    monkeypatch.setattr(spectrum_module, "exact_sdof_peaks", lambda t, ag, periods, damping: (
+        np.full(len(periods), np.nan), np.full(len(periods), np.nan)))
+    sp = nvib.spectrum(_record(), [0.5], max_halvings=2)
+    assert np.isnan(sp.error[0])
+    # halved as far as allowed, as for any error above the accuracy: two halvings, and dt is the step of the
+    # last runs, the ones the error is of
+    assert sp.dt[0] == first.dt[0] / 4
+
+
+def test_ida_checks_its_measure_before_any_run(monkeypatch):
+    model = two_storeys()
+    # every run of this diverges (the central difference far beyond its stable step)
+    refused(nvib.ArgumentError, "measure", nvib.ida, model, [_record()], [1.0, 2.0], scheme=nvib.CentralDifference(),
+            dt=0.5, t_end=20.0, measure="bogus", progress=False)
+    message = refused(nvib.ArgumentError, "measure", nvib.ida, model, [_record()], [1.0], dt=1e-3, t_end=0.1,
+                      measure="storey3", progress=False)
+    assert "storey1" in message
+    out = nvib.ida(model, [_record()], [1.0], dt=1e-3, t_end=0.5, measure="storey2", progress=False)
+    assert np.isfinite(out.measure).all()
