@@ -29,7 +29,7 @@ from ._model import Model
 from ._progress import ProgressBar
 from ._records import GroundMotion
 from ._core import StopToken
-from ._solve import Status, solve
+from ._solve import Status, check_run_settings, check_step_fits, solve
 
 __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
 
@@ -159,6 +159,9 @@ def _expand(models, ground_motions, scales, variations):
             if isinstance(variations[key], (str, bytes)) or not hasattr(variations[key], "__len__"):
                 raise _checks.type_error(f"variations[{key!r}]", "expected a list of values, one per run")
         lengths = {key: len(v) for key, v in variations.items()}
+        for key, count in lengths.items():
+            if count == 0:
+                raise _checks.value_error(f"variations[{key!r}]", "empty: expected a list of values, one per run")
         if len(set(lengths.values())) > 1:
             raise _checks.value_error("variations", f"every parameter needs as many values (got {lengths})")
         nvar = next(iter(lengths.values()), 1)
@@ -423,6 +426,14 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     """
     if keep not in ("history", "peaks"):
         raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
+    _check_options(options, keep)
+    dt = _checks.real("dt", dt, positive=True)
+    t_end = _checks.real("t_end", t_end)
+    check_step_fits(dt, _checks.real("t0", options.get("t0", 0.0)), t_end)
+    if threads is not None:
+        threads = _checks.integer("threads", threads, minimum=1, maximum=None)
+    if processes is not None:
+        processes = _checks.boolean("processes", processes)
     runs = _expand(models, ground_motions, scales, variations)
     schemes = list(scheme) if isinstance(scheme, (list, tuple)) else [scheme] * len(runs)
     if len(schemes) != len(runs):
@@ -434,7 +445,7 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
         label = {**label, "scheme": scheme_label(sc)}
         labels.append(label)
         items.append((m, g, s, changes, label, sc))
-    workers = max(1, int(threads) if threads is not None else (os.cpu_count() or 1))
+    workers = threads if threads is not None else max(1, os.cpu_count() or 1)
     uses_python = any(item[0]._core.has_python for item in items)
     if client is None and (workers > 1 or processes) and (processes if processes is not None else uses_python):
         _check_picklable(items, single=isinstance(models, Model))
@@ -457,6 +468,28 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     finally:
         bar.close()
     return Batch(results, labels)
+
+
+def _check_options(options: dict, keep: str) -> None:
+    """The keywords solve_many hands to solve(): each a keyword of solve() (a misspelt one is refused naming it,
+    not handed to every run to fail in), the settings that do not depend on the model checked once here."""
+    import inspect
+
+    allowed = set(inspect.signature(solve).parameters) - {"model", "scheme", "dt", "t_end", "throw", "progress"}
+    for key in options:
+        if key in ("throw", "progress"):
+            continue
+        if key not in allowed:
+            raise _checks.type_error(key, f"solve_many() got an unexpected keyword argument {key!r}"
+                                          f"{_checks.suggestion(key, allowed)} (it takes those of solve(): "
+                                          f"{', '.join(sorted(allowed))})")
+    if "throw" in options:
+        raise _checks.value_error("throw", "solve_many never raises for a run's failure: each result keeps its status "
+                                           "(Batch.failed lists the runs that failed)")
+    if keep == "peaks" and options.get("dofs") is not None:
+        raise _checks.value_error("dofs", 'keep="peaks" keeps the peak and the final state of every DOF; dofs '
+                                          'chooses the DOFs of keep="history"')
+    check_run_settings(options)
 
 
 def _serially(items, keep, options, bar, results, labels):

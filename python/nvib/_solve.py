@@ -294,6 +294,35 @@ def default_max_displacement(u, v, duration: float) -> float:
     return _core.default_max_displacement(u, v, _checks.real("duration", duration))
 
 
+def check_run_settings(options: dict) -> None:
+    """The settings of solve() that do not depend on the model (t0, save_every, the limits, the switches), checked
+    once for a batch of runs: each names itself as solve() would."""
+    if "t0" in options:
+        _checks.real("t0", options["t0"])
+    if "save_every" in options:
+        _checks.integer("save_every", options["save_every"], minimum=1)
+    for name in ("max_displacement", "max_energy_error"):
+        if options.get(name) is not None:
+            _limit(name, options[name])
+    if "warn_energy_error" in options:
+        _warning_level(options["warn_energy_error"])
+    if options.get("collapse_deformation") is not None:
+        _checks.real("collapse_deformation", options["collapse_deformation"], positive=True)
+    for name in ("energy", "stop_at_collapse"):
+        if name in options:
+            _checks.boolean(name, options[name])
+    if options.get("progress") is not None and not callable(options["progress"]):
+        raise _checks.type_error("progress", "expected a callable progress(step, n_steps)")
+
+
+def check_step_fits(dt: float, t0: float, t_end: float) -> None:
+    """A run of one step or more: a step longer than t_end - t0 would carry the run past t_end (to t0 + dt)
+    without a word, so it is refused naming dt (t_end <= t0 is the core's error, naming t_end)."""
+    if t_end > t0 and (t_end - t0) / dt < 1.0 - 1e-9:
+        raise _checks.value_error("dt", f"the step {dt:g} is longer than the run (t_end - t0 = {t_end - t0:g}), which "
+                                        f"would end at t = {t0 + dt:g}, past t_end; give dt <= t_end - t0")
+
+
 def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=None, v0=None,
           save_every: int = 1, dofs=None, throw: bool = True, max_displacement: float | None = None,
           progress=None, energy: bool = False, max_energy_error: float | None = None,
@@ -341,6 +370,7 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     dt = _checks.real("dt", dt, positive=True)
     t0 = _checks.real("t0", t0)
     t_end = _checks.real("t_end", t_end)
+    check_step_fits(dt, t0, t_end)
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error, record,

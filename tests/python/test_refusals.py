@@ -65,36 +65,37 @@ def test_a_record_signal_refuses_an_unknown_key_in_a_scene_a_model_and_the_comma
     assert "did you mean 'amplitude'" in message
 
 
-# ---- the arrays' entries -----------------------------------------------------------------------------
+# ---- solve_many --------------------------------------------------------------------------------------
 
-def test_arrays_of_objects_must_hold_real_numbers():
-    message = refused(TypeError, "mass", nvib.Model, np.array([Decimal(1), "2"], dtype=object))
-    assert "Decimal" in message
-    refused(TypeError, "mass", nvib.Model, [1.0, "2"])
-    refused(TypeError, "u0", nvib.Model, [1.0, 1.0], u0=[0.0, "1"])
-    refused(TypeError, "K", nvib.Model, [1.0], K=np.array([[Decimal(2)]], dtype=object))
-    refused(TypeError, "v0", nvib.solve, oscillator(), nvib.Newmark(), dt=0.01, t_end=0.1, v0=[True])
-    from fractions import Fraction
+@pytest.mark.parametrize("threads", [0, -1, 2.5, "4", True])
+def test_solve_many_threads_must_be_a_positive_integer(threads):
+    refused((ValueError, TypeError), "threads", nvib.solve_many, [oscillator()], nvib.Newmark(), dt=0.01, t_end=0.1,
+            threads=threads, progress=False)
 
-    assert nvib.Model(np.array([Fraction(1, 2), 1], dtype=object)).mass_matrix[0, 0] == 0.5  # real numbers are fine
-# ---- Rayleigh damping --------------------------------------------------------------------------------
 
-def test_rayleigh_refuses_non_finite_frequencies_negative_coefficients_and_a_second_application():
-    base = two_storeys()
-    refused(nvib.ArgumentError, "omegas", nvib.rayleigh, base, zeta=0.05, omegas=[10.0, math.inf])
-    refused(nvib.ArgumentError, "omegas", nvib.rayleigh_coefficients, 0.05, [math.nan, 10.0])
-    refused(nvib.ArgumentError, "alpha", nvib.rayleigh, base, alpha=-0.1)
-    refused(nvib.ArgumentError, "beta", nvib.rayleigh, base, alpha=0.1, beta=-1e-3)
-    # 0.1 at 1 rad/s and 0.005 at 10 rad/s need beta < 0: every mode above 14.1 rad/s damped negatively
-    message = refused(nvib.ArgumentError, "zeta", nvib.rayleigh, base, zeta=[0.1, 0.005], omegas=[1.0, 10.0])
-    assert "beta = -0.0010101" in message and "above 14.11 rad/s" in message and "negatively" in message
-    message = refused(nvib.ArgumentError, "zeta", nvib.rayleigh_coefficients, [0.01, 0.2], [1.0, 10.0])
-    assert "alpha = " in message and "below" in message
-    damped = nvib.rayleigh(base, zeta=0.05, omegas=[10.0, 40.0])
-    message = refused(nvib.ArgumentError, "model", nvib.rayleigh, damped, zeta=0.05, omegas=[10.0, 40.0])
-    assert "already has Rayleigh damping" in message
-    # a model derived from a damped one (a batch's variation) keeps its damping and its record of it
-    assert damped._rebuilt().rayleigh == damped.rayleigh
+@pytest.mark.parametrize("processes", ["no", 0, 1])
+def test_solve_many_processes_must_be_a_bool(processes):
+    refused(TypeError, "processes", nvib.solve_many, [oscillator()], nvib.Newmark(), dt=0.01, t_end=0.1,
+            processes=processes, progress=False)
+
+
+def test_solve_many_refuses_an_empty_variation_as_it_refuses_empty_scales():
+    refused(nvib.ArgumentError, "variations['storey1.k0']", nvib.solve_many, two_storeys(), nvib.CEMDTS(),
+            variations={"storey1.k0": []}, dt=1e-3, t_end=0.1, progress=False)
+    refused(nvib.ArgumentError, "scales", nvib.solve_many, two_storeys(), nvib.CEMDTS(), scales=[], dt=1e-3,
+            t_end=0.1, progress=False)
+
+
+def test_solve_many_refuses_a_misspelt_solve_keyword_and_bad_settings_once():
+    model = oscillator()
+    message = refused(TypeError, "save_evry", nvib.solve_many, [model], nvib.Newmark(), dt=0.01, t_end=0.1,
+                      save_evry=10, progress=False)
+    assert "did you mean 'save_every'" in message
+    for kw, arg in ((dict(max_displacement=math.nan), "max_displacement"), (dict(save_every=0), "save_every"),
+                    (dict(t0=math.inf), "t0"), (dict(energy="yes"), "energy"), (dict(dt=math.nan), "dt"),
+                    (dict(t_end=math.inf), "t_end"), (dict(throw=True), "throw"), (dict(dt=1.0), "dt")):
+        kw = {"dt": 0.01, "t_end": 0.1, **kw}
+        refused((ValueError, TypeError), arg, nvib.solve_many, [model], nvib.Newmark(), progress=False, **kw)
 
 
 # ---- spectrum and ida --------------------------------------------------------------------------------
@@ -130,3 +131,50 @@ def test_ida_checks_its_measure_before_any_run(monkeypatch):
     assert "storey1" in message
     out = nvib.ida(model, [_record()], [1.0], dt=1e-3, t_end=0.5, measure="storey2", progress=False)
     assert np.isfinite(out.measure).all()
+
+
+# ---- Rayleigh damping --------------------------------------------------------------------------------
+
+def test_rayleigh_refuses_non_finite_frequencies_negative_coefficients_and_a_second_application():
+    base = two_storeys()
+    refused(nvib.ArgumentError, "omegas", nvib.rayleigh, base, zeta=0.05, omegas=[10.0, math.inf])
+    refused(nvib.ArgumentError, "omegas", nvib.rayleigh_coefficients, 0.05, [math.nan, 10.0])
+    refused(nvib.ArgumentError, "alpha", nvib.rayleigh, base, alpha=-0.1)
+    refused(nvib.ArgumentError, "beta", nvib.rayleigh, base, alpha=0.1, beta=-1e-3)
+    # 0.1 at 1 rad/s and 0.005 at 10 rad/s need beta < 0: every mode above 14.1 rad/s damped negatively
+    message = refused(nvib.ArgumentError, "zeta", nvib.rayleigh, base, zeta=[0.1, 0.005], omegas=[1.0, 10.0])
+    assert "beta = -0.0010101" in message and "above 14.11 rad/s" in message and "negatively" in message
+    message = refused(nvib.ArgumentError, "zeta", nvib.rayleigh_coefficients, [0.01, 0.2], [1.0, 10.0])
+    assert "alpha = " in message and "below" in message
+    damped = nvib.rayleigh(base, zeta=0.05, omegas=[10.0, 40.0])
+    message = refused(nvib.ArgumentError, "model", nvib.rayleigh, damped, zeta=0.05, omegas=[10.0, 40.0])
+    assert "already has Rayleigh damping" in message
+    # a model derived from a damped one (a batch's variation) keeps its damping and its record of it
+    assert damped._rebuilt().rayleigh == damped.rayleigh
+
+
+# ---- solve's step ------------------------------------------------------------------------------------
+
+def test_a_step_longer_than_the_run_is_refused_naming_dt(capsys, tmp_path):
+    model = oscillator()
+    message = refused(nvib.ArgumentError, "dt", nvib.solve, model, nvib.Newmark(), dt=1.0, t_end=0.1)
+    assert "past t_end" in message
+    refused(nvib.ArgumentError, "dt", nvib.solve, model, nvib.Newmark(), dt=0.5, t0=1.0, t_end=1.2)
+    # a step that divides the run to round-off is one step, not refused
+    assert len(nvib.solve(model, nvib.Newmark(), dt=0.1, t0=0.7, t_end=0.8).t) == 2
+    code, _, err = run_cli(capsys, "run", "building", "--dt", "1", "--t-end", "0.1")
+    assert code == 2 and "--dt" in err and "past t_end" in err
+
+
+# ---- the arrays' entries -----------------------------------------------------------------------------
+
+def test_arrays_of_objects_must_hold_real_numbers():
+    message = refused(TypeError, "mass", nvib.Model, np.array([Decimal(1), "2"], dtype=object))
+    assert "Decimal" in message
+    refused(TypeError, "mass", nvib.Model, [1.0, "2"])
+    refused(TypeError, "u0", nvib.Model, [1.0, 1.0], u0=[0.0, "1"])
+    refused(TypeError, "K", nvib.Model, [1.0], K=np.array([[Decimal(2)]], dtype=object))
+    refused(TypeError, "v0", nvib.solve, oscillator(), nvib.Newmark(), dt=0.01, t_end=0.1, v0=[True])
+    from fractions import Fraction
+
+    assert nvib.Model(np.array([Fraction(1, 2), 1], dtype=object)).mass_matrix[0, 0] == 0.5  # real numbers are fine

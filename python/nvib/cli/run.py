@@ -100,6 +100,7 @@ def load_model(args):
 
 def run(args) -> int:
     from .. import Status, _core, solve
+    from .._solve import check_step_fits
     from .._progress import ProgressBar
 
     if args.out is not None:
@@ -137,6 +138,7 @@ def run(args) -> int:
         raise c.Usage("--t-end", f"the scene {model.scene['name']!r} sets no t_end; give --t-end")
     try:
         n_steps = _core.steps_to_reach(0.0, t_end, dt)
+        check_step_fits(dt, 0.0, t_end)
     except (ValueError, OverflowError) as exc:
         raise step_error(exc, args, model) from None
     save_every = args.save_every if args.save_every is not None else max(1, math.ceil(n_steps / MAX_SAVED))
