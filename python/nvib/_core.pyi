@@ -110,6 +110,7 @@ class Result:
     failure: Failure | None
     num_steps_requested: int
     max_residual: float | None
+    _peaks: tuple[Array, Array] | None
     scheme: _Scheme
     dt: float
 
@@ -174,7 +175,9 @@ class Stepper:
 
 def solve(model: Model, scheme: _Scheme, dt: float, t_end: float, t0: float, u0: Array, v0: Array,
           save_every: int = ..., dofs: Sequence[int] = ..., max_displacement: float = ..., energy: bool = ...,
-          max_energy_error: float = ..., progress: Callable[[int, int], None] | None = ...) -> Result: ...
+          max_energy_error: float = ..., progress: Callable[[int, int], None] | None = ...,
+          record: Sequence[str] = ..., collapse_deformation: float = ..., stop_at_collapse: bool = ...,
+          peaks: Any = ...) -> Result: ...
 def expm(A: Array, squarings: int = ...) -> Array: ...
 def steps_to_reach(t0: float, t_end: float, dt: float) -> int: ...
 def default_max_displacement(u: Array, v: Array, duration: float) -> float: ...

@@ -366,6 +366,17 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     memory deforms beyond it: the run then stops with status ``collapsed`` (returned, never raised;
     ``Result.warnings`` names the effect), unless ``stop_at_collapse=False``.
     """
+    return _solve(model, scheme, None, dt=dt, t_end=t_end, t0=t0, u0=u0, v0=v0, save_every=save_every, dofs=dofs,
+                  throw=throw, max_displacement=max_displacement, progress=progress, energy=energy,
+                  max_energy_error=max_energy_error, warn_energy_error=warn_energy_error, record=record,
+                  collapse_deformation=collapse_deformation, stop_at_collapse=stop_at_collapse)
+
+
+def _solve(model: Model, scheme, peaks, *, dt, t_end, t0=0.0, u0=None, v0=None, save_every=1, dofs=None, throw=True,
+           max_displacement=None, progress=None, energy=False, max_energy_error=None,
+           warn_energy_error=ENERGY_WARNING, record=None, collapse_deformation=None, stop_at_collapse=True) -> Result:
+    """solve(), and with ``peaks`` (an (m, n) scipy.sparse matrix D) the peaks max |u_i| and max |D u| over every
+    step, saved or not, in ``Result._peaks`` (what solve_many(keep="peaks") keeps of a run)."""
     _check_model(model)
     dt = _checks.real("dt", dt, positive=True)
     t0 = _checks.real("t0", t0)
@@ -377,7 +388,7 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
                         collapse_deformation, stop_at_collapse)
     warn = _warning_level(warn_energy_error)
     with _partial_annotated(model, warn):
-        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
+        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts, peaks=peaks), model, warn)
     if throw and not res.success and res.status != Status.collapsed:
         raise error_for(res.failure, res)
     return res

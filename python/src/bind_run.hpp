@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "bind_models.hpp"
@@ -181,10 +182,14 @@ inline void bind_run(py::module_& m) {
       [](PyModel& model, py::object scheme, double dt, double t_end, double t0, const Vector& u0, const Vector& v0,
          std::int64_t save_every, std::vector<Index> dofs, double max_displacement, bool energy,
          double max_energy_error, py::object progress, std::vector<std::string> record, double collapse_deformation,
-         bool stop_at_collapse) {
+         bool stop_at_collapse, std::optional<nvib::SparseMatrix> peaks) {
         SolveOptions opt = solve_options(save_every, std::move(dofs), max_displacement, energy, max_energy_error,
                                          std::move(record), collapse_deformation, stop_at_collapse);
         opt.t0 = t0;
+        if (peaks) {
+          opt.peaks = true;
+          opt.peak_measures = std::move(*peaks);
+        }
         auto result = std::make_unique<PyResult>();
         result->scheme = scheme;
         result->dt = dt;
@@ -206,8 +211,9 @@ inline void bind_run(py::module_& m) {
       py::arg("v0"), py::arg("save_every") = 1, py::arg("dofs") = std::vector<Index>{},
       py::arg("max_displacement") = nan, py::arg("energy") = false, py::arg("max_energy_error") = nan,
       py::arg("progress") = py::none(), py::arg("record") = std::vector<std::string>{},
-      py::arg("collapse_deformation") = nan, py::arg("stop_at_collapse") = true,
-      "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end; NaN limits mean the defaults.");
+      py::arg("collapse_deformation") = nan, py::arg("stop_at_collapse") = true, py::arg("peaks") = py::none(),
+      "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end; NaN limits mean the defaults. "
+      "peaks: None, or an (m, n) sparse matrix D: Result._peaks is then (max |u_i|, max |D u|) over every step.");
 
   py::class_<AnyStepper>(m, "Stepper", "Step-by-step integration; one thread at a time.")
       .def(py::init(&make_stepper), py::arg("model"), py::arg("scheme"), py::arg("dt"))

@@ -98,6 +98,53 @@ def test_solve_many_refuses_a_misspelt_solve_keyword_and_bad_settings_once():
         refused((ValueError, TypeError), arg, nvib.solve_many, [model], nvib.Newmark(), progress=False, **kw)
 
 
+def _saved_states(monkeypatch):
+    """The save_every each run was made with and the states it saved, from the core's solve."""
+    seen = []
+    core_solve = nvib._core.solve
+
+    def spy(*args, **kwargs):
+        res = core_solve(*args, **kwargs)
+        seen.append((kwargs.get("save_every"), len(res.t)))
+        return res
+
+    monkeypatch.setattr(nvib._core, "solve", spy)
+    return seen
+
+
+def test_keep_peaks_honours_save_every_and_its_peaks_are_over_every_step(monkeypatch):
+    base = two_storeys()
+    run = dict(dt=1e-3, t_end=2.5, threads=1, progress=False, energy=True)
+    hist = nvib.solve_many(base, nvib.CEMDTS(), scales=[1.0, 2.0], **run)
+    seen = _saved_states(monkeypatch)
+    peaks = nvib.solve_many(base, nvib.CEMDTS(), scales=[1.0, 2.0], keep="peaks", save_every=1000, **run)
+    assert seen == [(1000, 4), (1000, 4)]  # steps 0, 1000, 2000 and the last: the caller's save_every
+    for h, p in zip(hist, peaks):
+        np.testing.assert_array_equal(p.peak_u, np.max(np.abs(h.u), axis=0))
+        assert p.peak_measures["storey2"] == np.max(np.abs(h.u[:, 1] - h.u[:, 0]))
+        assert p.peak_measures["storey1"] == np.max(np.abs(h.u[:, 0]))
+        np.testing.assert_array_equal(p.u_final, h.u[-1])
+        np.testing.assert_array_equal(p.v_final, h.v[-1])
+        assert p.t_final == h.t[-1]
+        assert p.energy_error == h.energy.relative_balance_error()  # over every step too
+    # without save_every a summary run saves at most MAX_SUMMARY_STATES states, not its whole history
+    seen.clear()
+    nvib.solve_many(base, nvib.CEMDTS(), keep="peaks", dt=1e-4, t_end=2.5, threads=1, progress=False)
+    (every, states), = seen
+    assert every == 25 and states == 1001
+    refused(nvib.ArgumentError, "dofs", nvib.solve_many, base, nvib.CEMDTS(), keep="peaks", dofs=["x1"], dt=1e-3,
+            t_end=0.1, progress=False)
+
+
+def test_keep_peaks_of_effect_arrays_are_over_every_step():
+    chain = nvib.scenes.chain(4)
+    hist = nvib.solve_many([chain], nvib.Newmark(), dt=0.01, t_end=3.0, progress=False)[0]
+    p = nvib.solve_many([chain], nvib.Newmark(), dt=0.01, t_end=3.0, progress=False, keep="peaks", save_every=50)[0]
+    drift = np.diff(np.column_stack([np.zeros(len(hist.u)), hist.u]), axis=1)
+    np.testing.assert_array_equal(p.peak_measures["storeys"], np.max(np.abs(drift), axis=0))
+    np.testing.assert_array_equal(p.peak_u, np.max(np.abs(hist.u), axis=0))
+
+
 # ---- spectrum and ida --------------------------------------------------------------------------------
 
 def _record():
