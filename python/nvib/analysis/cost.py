@@ -340,6 +340,7 @@ def _scipy_row(solve_ivp, model, method, rtol, scale, y0, t_eval, t_end, cols, r
 
 def cheapest(rows: list[dict], target: float, *, contender: str | None = None) -> dict | None:
     """The successful row with max_error <= target and the least wall time (of one contender if given)."""
+    target = _checks.real("target", target, positive=True)
     ok = [r for r in rows if r["status"] == "success" and r["max_error"] <= target
           and (contender is None or r["contender"] == contender)]
     return min(ok, key=lambda r: r["wall_time"]) if ok else None
@@ -350,6 +351,7 @@ def time_at_error(rows: list[dict], target: float) -> dict:
     log(time) against log(error) between the two runs (in order of dt or rtol) where the error first
     falls to the target; NaN when the curve never reaches it. Less tied to the grid of dt or rtol
     than ``cheapest``."""
+    target = _checks.real("target", target, positive=True)
     out = {}
     groups: dict = {}
     for r in rows:
@@ -411,6 +413,8 @@ def work_precision_figure(rows: list[dict], *, title: str | None = None, target:
     """Work-precision diagram: log max_error against log wall time, one line per (contender, label), points
     in order of dt or rtol. Failed runs are counted in the legend, not drawn. ``target`` draws a dashed
     line at that error and marks the cheapest run of each contender (nvib, SciPy) that reaches it with a star."""
+    if target is not None:
+        target = _checks.real("target", target, positive=True)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
