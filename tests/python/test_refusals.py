@@ -211,6 +211,9 @@ def test_a_step_longer_than_the_run_is_refused_naming_dt(capsys, tmp_path):
     assert len(nvib.solve(model, nvib.Newmark(), dt=0.1, t0=0.7, t_end=0.8).t) == 2
     code, _, err = run_cli(capsys, "run", "building", "--dt", "1", "--t-end", "0.1")
     assert code == 2 and "--dt" in err and "past t_end" in err
+    refused(nvib.ArgumentError, "dts", nvib.cost, model, [nvib.Newmark()], [0.01, 1.0], t_end=0.1, repeats=1)
+    code, _, err = run_cli(capsys, "cost", "pendulum", "--dt", "100", "0.01", "--repeats", "1", "--no-scipy")
+    assert code == 2 and "argument --dt: the step 100 is longer than the run" in err
 
 
 # ---- the arrays' entries -----------------------------------------------------------------------------

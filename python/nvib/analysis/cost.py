@@ -170,6 +170,10 @@ def cost(model: Model, schemes, dts, *, t_end: float | None = None, dofs=None, r
     if not dts:
         raise _checks.value_error("dts", "give at least one step")
     t_end = _t_end(model, t_end)
+    for dt in dts:
+        if t_end / dt < 1.0 - 1e-9:
+            raise _checks.value_error("dts", f"the step {dt:g} is longer than the run (t_end = {t_end:g}), which would "
+                                             f"end at t = {dt:g}, past t_end; give steps <= t_end")
     cols = _dof_columns(model, dofs)
     repeats, long_run = _check_common(repeats, long_run)
     max_saved = _checks.integer("max_saved", max_saved, minimum=2)

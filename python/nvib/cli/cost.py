@@ -79,6 +79,7 @@ def run(args) -> int:
     from .. import cost as run_cost, cost_scipy, reference
     from ..analysis.cost import SCIPY_METHODS, SCIPY_RTOLS, cheapest, markdown_table, plot_work_precision
     from .. import _core
+    from .._solve import check_step_fits
     from .run import load_model, step_error
 
     model = load_model(args)
@@ -104,6 +105,7 @@ def run(args) -> int:
     for dt in dts:  # a step count beyond 64 bits names the flag given (or the scene's key), not the library's dt
         try:
             _core.steps_to_reach(0.0, t_end, dt)
+            check_step_fits(dt, 0.0, t_end)
         except (ValueError, OverflowError) as exc:
             raise step_error(exc, args, model) from None
     methods = [] if args.no_scipy else (args.scipy or list(SCIPY_METHODS))
