@@ -28,8 +28,9 @@ from ._labels import scheme_label
 from ._model import Model
 from ._progress import ProgressBar
 from ._records import GroundMotion
+from . import _core
 from ._core import StopToken
-from ._solve import Status, check_option_names, solve
+from ._solve import Status, _solve, check_option_names, check_settings, solve
 
 __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
 
@@ -38,7 +39,8 @@ __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
 class RunSummary:
     """What ``keep="peaks"`` keeps of a run: its status and message, the peak |u| of every DOF, the peak
     |d| of every named effect's measure (a storey's drift), the final state, the largest relative energy
-    balance error (with ``energy=True``), the counters and the wall time. ``label`` says what the run was."""
+    balance error (with ``energy=True``), the counters and the wall time. ``label`` says what the run was.
+    The peaks and the energy error are over every step of the run, whatever ``save_every``."""
 
     label: dict
     status: Status | None
@@ -159,6 +161,9 @@ def _expand(models, ground_motions, scales, variations):
             if isinstance(variations[key], (str, bytes)) or not hasattr(variations[key], "__len__"):
                 raise _checks.type_error(f"variations[{key!r}]", "expected a list of values, one per run")
         lengths = {key: len(v) for key, v in variations.items()}
+        for key, count in lengths.items():
+            if count == 0:
+                raise _checks.value_error(f"variations[{key!r}]", "empty: expected a list of values, one per run")
         if len(set(lengths.values())) > 1:
             raise _checks.value_error("variations", f"every parameter needs as many values (got {lengths})")
         nvar = next(iter(lengths.values()), 1)
@@ -183,20 +188,61 @@ def _expand(models, ground_motions, scales, variations):
     return [(m, None, 1.0, {}, {"model": m.name or k}) for k, m in enumerate(models)]
 
 
-def _summary(model: Model, res, label: dict) -> RunSummary:
-    u = res.u
-    peak_u = np.max(np.abs(u), axis=0) if len(u) else np.zeros(model.n)
-    measures = {}
+MAX_SUMMARY_STATES = 1000  # keep="peaks" without save_every: states a run saves at most
+
+
+def _peak_rows(model: Model):
+    """The measures whose peaks a summary keeps, as the rows of a sparse matrix D (d = D u): one row per named
+    effect that is not a load, one per effect of a named array (d_k = u[i_k] - u[j_k]); and [(name, rows,
+    one)] saying which rows are whose (one: a single effect, a float; else an array of peaks)."""
+    from scipy import sparse
+
+    rows, cols, vals, layout = [], [], [], []
+    m = 0
     for e in model.effects or []:
         if e.name and not e.is_load:
-            d = u[:, list(e.index)] @ np.asarray(e.coef)
-            measures[e.name] = float(np.max(np.abs(d))) if d.size else 0.0
+            rows += [m] * len(e.index)
+            cols += list(e.index)
+            vals += [float(c) for c in e.coef]
+            layout.append((e.name, slice(m, m + 1), True))
+            m += 1
     for arr in model.effect_arrays:
-        if arr.name and not arr.is_load:  # one peak per effect of the array: d_k = u[i_k] - u[j_k]
-            i, j = np.asarray(arr.i), np.asarray(arr.j)
-            uj = np.where(j >= 0, u[:, np.maximum(j, 0)], 0.0) if j.size else 0.0
-            measures[arr.name] = np.max(np.abs(u[:, i] - uj), axis=0) if len(u) else np.zeros(i.size)
-    err = float(res.energy.relative_balance_error()) if res.energy is not None else None
+        if arr.name and not arr.is_load:
+            i, j = np.asarray(arr.i, dtype=int), np.asarray(arr.j, dtype=int)
+            k = np.arange(m, m + i.size)
+            rows += k.tolist() + k[j >= 0].tolist()
+            cols += i.tolist() + j[j >= 0].tolist()
+            vals += [1.0] * i.size + [-1.0] * int(np.count_nonzero(j >= 0))
+            layout.append((arr.name, slice(m, m + i.size), False))
+            m += i.size
+    D = sparse.csc_matrix((vals, (rows, cols)), shape=(m, model.n), dtype=float)
+    return D, layout
+
+
+def _summary(model: Model, res, label: dict, layout=None) -> RunSummary:
+    """A run's summary: the peaks the run tracked over every step (a run made with peaks), else those of its
+    saved history (a partial result of an interrupted run made without)."""
+    u = res.u
+    tracked = res._peaks if layout is not None else None
+    if tracked is not None:
+        peak_u, peak_d, tracked_err = tracked
+        measures = {name: (float(peak_d[rows][0]) if one else np.array(peak_d[rows])) for name, rows, one in layout}
+    else:
+        peak_u = np.max(np.abs(u), axis=0) if len(u) else np.zeros(model.n)
+        measures = {}
+        for e in model.effects or []:
+            if e.name and not e.is_load:
+                d = u[:, list(e.index)] @ np.asarray(e.coef)
+                measures[e.name] = float(np.max(np.abs(d))) if d.size else 0.0
+        for arr in model.effect_arrays:
+            if arr.name and not arr.is_load:  # one peak per effect of the array: d_k = u[i_k] - u[j_k]
+                i, j = np.asarray(arr.i), np.asarray(arr.j)
+                uj = np.where(j >= 0, u[:, np.maximum(j, 0)], 0.0) if j.size else 0.0
+                measures[arr.name] = np.max(np.abs(u[:, i] - uj), axis=0) if len(u) else np.zeros(i.size)
+    if tracked is not None and tracked_err is not None:
+        err = float(tracked_err)
+    else:
+        err = float(res.energy.relative_balance_error()) if res.energy is not None else None
     msg = res.failure.message if res.failure is not None else ""
     return RunSummary(label, res.status, msg, peak_u, measures, float(res.t[-1]), u[-1].copy(), res.v[-1].copy(),
                       err, res.stats, res.stats.wall_time)
@@ -207,8 +253,16 @@ def _run_one(model, motion, scale, changes, label, scheme, keep, options):
     try:
         m = _derived(model, motion, scale, changes) if (motion is not None or scale != 1.0 or changes) else model
         if keep == "peaks":
-            res = solve(m, scheme, throw=False, **{**options, "save_every": 1, "dofs": None})
-            return _summary(m, res, label)
+            # the peaks (and with energy the balance error) are tracked over every step by the run itself; the
+            # history it saves (the caller's save_every, else at most MAX_SUMMARY_STATES states) is dropped once
+            # the final state is read from it
+            D, layout = _peak_rows(m)
+            opts = dict(options)
+            if "save_every" not in opts:
+                steps = _core.steps_to_reach(float(opts.get("t0", 0.0)), opts["t_end"], opts["dt"])
+                opts["save_every"] = max(1, math.ceil(steps / MAX_SUMMARY_STATES))
+            res = _solve(m, scheme, D, throw=False, **opts)
+            return _summary(m, res, label, layout)
         return solve(m, scheme, throw=False, **options)
     except (ValueError, TypeError, ArithmeticError, RuntimeError) as exc:
         return RunError(label, exc)
@@ -220,7 +274,7 @@ def _partial(item, keep, options, exc: BaseException):
     res = getattr(exc, "result", None)
     if res is None or keep != "peaks":
         return res
-    return _summary(item[0], res, item[4])
+    return _summary(item[0], res, item[4], _peak_rows(item[0])[1] if res._peaks is not None else None)
 
 
 def _run_chunk(items, keep, options, stop=None):
@@ -413,7 +467,8 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     levels; every motion at every scale) and/or ``variations`` ({"storey1.k0": [values...], ...}: run k
     sets every listed parameter of the named effect to its k-th value; with motions and scales, every
     combination). ``scheme``: one scheme, or a list of one per run. ``keep``: "history" (each run's
-    Result) or "peaks" (a RunSummary: memory stays bounded for 10^5 runs). ``threads``: worker threads
+    Result) or "peaks" (a RunSummary: memory stays bounded for 10^5 runs; the peaks are tracked over every
+    step while the run saves only every ``save_every``-th state, by default at most 1000 states, and drops them). ``threads``: worker threads
     (default: every core); models that call Python go to as many processes instead (``processes=True``
     forces processes). ``client``: a ``dask.distributed.Client`` to send chunks of runs to (the same
     results as a local run). Other keywords go to ``solve()`` (``save_every``, ``dofs``, ``energy``, ...).
@@ -423,7 +478,13 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     """
     if keep not in ("history", "peaks"):
         raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
-    check_option_names(options, also=("t0", "u0", "v0"))  # before any run: each would fail the same way
+    _check_options(options, keep)
+    dt, t_end = _checks.number("dt", dt), _checks.number("t_end", t_end)
+    _core.run_steps(_checks.number("t0", options.get("t0", 0.0)), t_end, dt)  # the core's checks, once for all
+    if threads is not None:
+        threads = _checks.integer("threads", threads, minimum=1, maximum=None)
+    if processes is not None:
+        processes = _checks.boolean("processes", processes)
     runs = _expand(models, ground_motions, scales, variations)
     schemes = list(scheme) if isinstance(scheme, (list, tuple)) else [scheme] * len(runs)
     if len(schemes) != len(runs):
@@ -435,7 +496,7 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
         label = {**label, "scheme": scheme_label(sc)}
         labels.append(label)
         items.append((m, g, s, changes, label, sc))
-    workers = max(1, int(threads) if threads is not None else (os.cpu_count() or 1))
+    workers = threads if threads is not None else max(1, os.cpu_count() or 1)
     uses_python = any(item[0]._core.has_python for item in items)
     if client is None and (workers > 1 or processes) and (processes if processes is not None else uses_python):
         _check_picklable(items, single=isinstance(models, Model))
@@ -458,6 +519,19 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     finally:
         bar.close()
     return Batch(results, labels)
+
+
+def _check_options(options: dict, keep: str) -> None:
+    """The keywords solve_many hands to solve(): each a keyword of solve() (a misspelt one is refused naming it,
+    not handed to every run to fail in), the settings that do not depend on the model checked once here."""
+    check_option_names(options, also=("t0", "u0", "v0"))
+    if "throw" in options:
+        raise _checks.value_error("throw", "solve_many never raises for a run's failure: each result keeps its status "
+                                           "(Batch.failed lists the runs that failed)")
+    if keep == "peaks" and options.get("dofs") is not None:
+        raise _checks.value_error("dofs", 'keep="peaks" keeps the peak and the final state of every DOF; dofs '
+                                          'chooses the DOFs of keep="history"')
+    check_settings({k: v for k, v in options.items() if k not in ("t0", "u0", "v0")})
 
 
 def _serially(items, keep, options, bar, results, labels):

@@ -28,6 +28,23 @@ def type_error(name: str, what: str) -> ArgumentTypeError:
     return exc
 
 
+def suggestion(key: str, valid) -> str:
+    """The words " (did you mean 'scale'?)" when a valid name is close to ``key`` (a misspelling), else ""."""
+    import difflib
+
+    close = difflib.get_close_matches(str(key), sorted(valid), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def unknown_keys(where: str, spec: dict, valid, what: str) -> None:
+    """Refuse a key of ``spec`` that is not in ``valid``: ArgumentError naming "<where>.<key>", the close valid
+    name if there is one, and the valid keys."""
+    for key in spec:
+        if key not in valid:
+            raise value_error(f"{where}.{key}", f"unknown key for {what}{suggestion(key, valid)} (expected "
+                                                f"{', '.join(sorted(valid))})")
+
+
 def real(name: str, x, *, positive: bool = False) -> float:
     if isinstance(x, bool) or not isinstance(x, numbers.Real):
         raise type_error(name, f"expected a real number, got {type(x).__name__}")
@@ -98,7 +115,10 @@ def real_array(name: str, x) -> np.ndarray:
         raise value_error(name, f"expected a regular array of real numbers ({exc})") from None
     if a.dtype.kind in "iuf":
         return a.astype(float, copy=False)
-    if a.dtype.kind == "O":
+    if a.dtype.kind == "O":  # mixed entries: each must be a real number (not a string, a Decimal, a bool, None)
+        for x in a.flat:
+            if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
+                raise type_error(name, f"expected real numbers, got an entry {x!r} of type {type(x).__name__}")
         try:
             return a.astype(float)
         except (TypeError, ValueError, OverflowError) as exc:

@@ -21,14 +21,27 @@ def rayleigh_coefficients(zeta, omegas) -> tuple[float, float]:
     """(alpha, beta) giving the damping ratios ``zeta`` (one for both, or a pair) at the circular
     frequencies ``omegas`` = (w1, w2) [rad/s], w1 != w2."""
     w = _checks.real_array("omegas", omegas)
-    if w.shape != (2,) or not np.all(w > 0) or w[0] == w[1]:
-        raise _checks.value_error("omegas", f"expected two different positive circular frequencies, got {w.tolist()}")
-    z = np.broadcast_to(_checks.real_array("zeta", zeta), (2,)).astype(float)
+    if w.shape != (2,) or not np.all(np.isfinite(w)) or not np.all(w > 0) or w[0] == w[1]:
+        raise _checks.value_error("omegas", f"expected two different positive finite circular frequencies, "
+                                            f"got {w.tolist()}")
+    z = _checks.real_array("zeta", zeta)
+    if z.shape not in ((), (1,), (2,)):
+        raise _checks.value_error("zeta", f"expected a damping ratio or two (one per frequency), got shape {z.shape}")
+    z = np.broadcast_to(z, (2,)).astype(float)
     if not np.all((z >= 0) & (z < 1)):
         raise _checks.value_error("zeta", f"expected damping ratios 0 <= zeta < 1, got {z.tolist()}")
     A = np.array([[1.0 / (2.0 * w[0]), w[0] / 2.0], [1.0 / (2.0 * w[1]), w[1] / 2.0]])
-    alpha, beta = np.linalg.solve(A, z)
-    return float(alpha), float(beta)
+    alpha, beta = (float(x) for x in np.linalg.solve(A, z))
+    if alpha < 0.0 or beta < 0.0:
+        # zeta(w) = alpha / (2 w) + beta w / 2 changes sign at w = sqrt(-alpha / beta)
+        cross = float(np.sqrt(-alpha / beta)) if alpha * beta < 0.0 else 0.0
+        which, side = ("beta", "above") if beta < 0.0 else ("alpha", "below")
+        raise _checks.value_error("zeta", f"the ratios {z.tolist()} at the frequencies {w.tolist()} rad/s give "
+                                          f"{which} = {alpha if which == 'alpha' else beta:.6g} < 0 (alpha = {alpha:.6g}, "
+                                          f"beta = {beta:.6g}): every mode {side} {cross:.4g} rad/s would be damped "
+                                          "negatively (its energy would grow); give ratios that change less "
+                                          f"from {w[0]:.4g} to {w[1]:.4g} rad/s, or alpha and beta >= 0")
+    return alpha, beta
 
 
 def _mode_frequencies(model: Model, K0, modes) -> np.ndarray:
@@ -59,6 +72,12 @@ def rayleigh(model: Model, *, zeta=None, omegas=None, modes=None, alpha: float |
     and/or ``beta`` directly. The returned model records what was added in ``model.rayleigh``."""
     if not isinstance(model, Model):
         raise _checks.type_error("model", f"expected a Model, got {type(model).__name__}")
+    before = getattr(model, "rayleigh", None)
+    if before is not None:
+        raise _checks.value_error("model", f"already has Rayleigh damping (alpha = {before['alpha']:.6g}, beta = "
+                                           f"{before['beta']:.6g}) in its C; a second would add to it while "
+                                           "model.rayleigh told of the second alone: apply rayleigh once, to the model "
+                                           "built without it (a scene's damping is its [damping] table)")
     direct = alpha is not None or beta is not None
     if direct and (zeta is not None or omegas is not None or modes is not None):
         raise _checks.value_error("alpha, beta", "give alpha/beta, or zeta with omegas or modes, not both")
@@ -67,6 +86,10 @@ def rayleigh(model: Model, *, zeta=None, omegas=None, modes=None, alpha: float |
     if direct:
         alpha = 0.0 if alpha is None else _checks.real("alpha", alpha)
         beta = 0.0 if beta is None else _checks.real("beta", beta)
+        for name, value in (("alpha", alpha), ("beta", beta)):
+            if value < 0.0:
+                raise _checks.value_error(name, f"must be >= 0, got {value:g} (a negative coefficient damps "
+                                                "modes negatively: their energy would grow)")
         w = None
     else:
         if zeta is None:

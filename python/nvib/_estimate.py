@@ -55,7 +55,7 @@ def estimate(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0,
     dt, t0, t_end = _checks.number("dt", dt), _checks.number("t0", t0), _checks.number("t_end", t_end)
     save_every = _checks.integer("save_every", save_every, minimum=1)
     probe_seconds = _checks.real("probe_seconds", probe_seconds, positive=True)
-    steps = _core.steps_to_reach(t0, t_end, dt)  # checks dt, t0 and t_end
+    steps = _core.run_steps(t0, t_end, dt)  # checks dt, t0 and t_end as solve does
     saved = steps // save_every + 1 + (1 if steps % save_every else 0)
     m = len(_dof_indices(model, dofs)) or model.n
     t_start = time.perf_counter()

@@ -54,9 +54,7 @@ def _signal(where: str, spec) -> dict:
     if kind not in _SIGNAL_KEYS:
         raise _checks.value_error(f"{where}.kind", f"expected 'sine', 'table' or 'record', got {kind!r}")
     required, optional = _SIGNAL_KEYS[kind]
-    for key in spec:
-        if key != "kind" and key not in required and key not in optional:
-            raise _checks.value_error(f"{where}.{key}", f"unknown key for a {kind} signal (expected {', '.join(required + tuple(optional))})")
+    _checks.unknown_keys(where, spec, ("kind",) + required + tuple(optional), f"a {kind} signal")
     for key in required:
         if key not in spec:
             raise _checks.value_error(f"{where}.{key}", "missing")

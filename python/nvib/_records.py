@@ -184,7 +184,9 @@ class GroundMotion:
 
     @classmethod
     def from_spec(cls, where: str, spec: dict, *, base_dir: str | None = None) -> GroundMotion:
-        """A scene's ``{kind = "record", file = ..., scale = 1, dt = ...}``: ``file`` relative to base_dir."""
+        """A scene's ``{kind = "record", file = ..., scale = 1, dt = ...}``: ``file`` relative to base_dir. Any
+        other key is refused naming it (a misspelt ``scale`` would leave the record unscaled)."""
+        _checks.unknown_keys(where, spec, ("kind", "file", "scale", "dt"), "a record signal")
         file = spec.get("file")
         if not isinstance(file, str) or not file:
             raise _checks.value_error(f"{where}.file", "expected the path of a record file")

@@ -208,9 +208,10 @@ def check_option_names(options: dict, *, also=()) -> None:
             raise _checks.type_error(key, f"not an option of a run{hint}")
 
 
-def _run_options(model: Model, given: dict) -> tuple[dict, object, bool, float]:
-    """The options of a run from the caller's keywords: (the C++ loop's options, progress, throw,
-    warn_energy_error). Types are converted and Python's own options checked; the loop checks the rest."""
+def check_settings(given: dict) -> tuple[dict, object, bool, float]:
+    """The options of a run that do not depend on the model, from the caller's keywords: (the C++ loop's
+    options among them, progress, throw, warn_energy_error). Types are converted and Python's own options
+    checked (the loop checks the rest); solve_many checks a batch's options with it once, before any run."""
     check_option_names(given)
     o = {**RUN_OPTIONS, **given}
     progress = o["progress"]
@@ -219,14 +220,20 @@ def _run_options(model: Model, given: dict) -> tuple[dict, object, bool, float]:
     if not isinstance(o["energy"], bool):
         raise _checks.type_error("energy", f"expected True or False, got {type(o['energy']).__name__}")
     core = dict(save_every=_checks.integer("save_every", o["save_every"], minimum=1),
-                dofs=_dof_indices(model, o["dofs"]),
                 max_displacement=_limit("max_displacement", o["max_displacement"]), energy=o["energy"],
                 max_energy_error=_limit("max_energy_error", o["max_energy_error"]),
-                record=_record(model, o["record"]),
                 collapse_deformation=math.nan if o["collapse_deformation"] is None else
                 _checks.real("collapse_deformation", o["collapse_deformation"], positive=True),
                 stop_at_collapse=_checks.boolean("stop_at_collapse", o["stop_at_collapse"]))
     return core, progress, _checks.boolean("throw", o["throw"]), _warning_level(o["warn_energy_error"])
+
+
+def _run_options(model: Model, given: dict) -> tuple[dict, object, bool, float]:
+    """check_settings, and the options that name the model's DOFs and effects."""
+    core, progress, throw, warn = check_settings(given)
+    core.update(dofs=_dof_indices(model, given.get("dofs", RUN_OPTIONS["dofs"])),
+                record=_record(model, given.get("record", RUN_OPTIONS["record"])))
+    return core, progress, throw, warn
 
 
 def _with_options(*fixed: inspect.Parameter):
@@ -364,11 +371,19 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     memory deforms beyond it: the run then stops with status ``collapsed`` (returned, never raised;
     ``Result.warnings`` names the effect), unless ``stop_at_collapse=False``.
     """
+    return _solve(model, scheme, None, dt=dt, t_end=t_end, t0=t0, u0=u0, v0=v0, **options)
+
+
+def _solve(model: Model, scheme, peaks, *, dt, t_end, t0=0.0, u0=None, v0=None, **options) -> Result:
+    """solve(), and with ``peaks`` (an (m, n) scipy.sparse matrix D) the peaks max |u_i| and max |D u| over every
+    step, saved or not, in ``Result._peaks`` (what solve_many(keep="peaks") keeps of a run)."""
     _check_model(model)
     dt, t0, t_end = _checks.number("dt", dt), _checks.number("t0", t0), _checks.number("t_end", t_end)  # C++ checks
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     opts, progress, throw, warn = _run_options(model, options)
+    if peaks is not None:
+        opts["peaks"] = peaks
     with _partial_annotated(model, warn):
         res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, opts, progress), model, warn)
     if throw and not res.success and res.status != Status.collapsed:

@@ -187,6 +187,13 @@ inline void bind_result(py::module_& m) {
         if (std::isnan(p.r.max_residual)) return py::none();
         return py::float_(p.r.max_residual);
       })
+      .def_property_readonly("_peaks", [](const PyResult& p) -> py::object {
+        if (p.r.peak_u.size() == 0 && p.r.peak_measures.size() == 0) return py::none();
+        const double e = p.r.peak_energy_error;
+        return py::make_tuple(nvib::Vector(p.r.peak_u), nvib::Vector(p.r.peak_measures),
+                              std::isnan(e) ? py::object(py::none()) : py::object(py::float_(e)));
+      }, "(max |u_i| per DOF, max |D u| per row of D, the relative energy balance error or None) over every step "
+         "of a run made with peaks=D; else None")
       .def_readonly("scheme", &PyResult::scheme)
       .def_readonly("dt", &PyResult::dt)
       .def_readwrite("_extras", &PyResult::extras, "what the Python layer adds: a dict (ground, units, warnings)")
@@ -197,10 +204,11 @@ inline void bind_result(py::module_& m) {
             for (const nvib::EffectRecord& e : r.effects)
               effects.append(py::make_tuple(e.name, e.type, e.state_names, e.count, e.measure, e.rate, e.force, e.state));
             return py::make_tuple(r.t, r.u, r.v, r.a, r.energy, r.dofs, r.stats, r.status, r.failure,
-                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.extras, effects);
+                                  r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.extras, effects,
+                                  r.peak_u, r.peak_measures, r.peak_energy_error);
           },
           [](const py::tuple& x) {
-            if (x.size() != 16) raise_value_error("state", "not a pickled Result");
+            if (x.size() != 16 && x.size() != 19) raise_value_error("state", "not a pickled Result");
             auto p = std::make_unique<PyResult>();
             nvib::Result& r = p->r;
             r.t = x[0].cast<nvib::Vector>();
@@ -230,6 +238,11 @@ inline void bind_result(py::module_& m) {
               rec.force = e[6].cast<nvib::History>();
               rec.state = e[7].cast<nvib::History>();
               r.effects.push_back(std::move(rec));
+            }
+            if (x.size() == 19) {
+              r.peak_u = x[16].cast<nvib::Vector>();
+              r.peak_measures = x[17].cast<nvib::Vector>();
+              r.peak_energy_error = x[18].cast<double>();
             }
             return p;
           }))

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "bind_models.hpp"
@@ -166,7 +167,10 @@ inline SolveOptions solve_options(const py::dict& given) {
     else if (key == "record") opt.record = v.cast<std::vector<std::string>>();
     else if (key == "collapse_deformation") opt.collapse_deformation = v.cast<double>();
     else if (key == "stop_at_collapse") opt.stop_at_collapse = v.cast<bool>();
-    else raise_type_error(key, "not an option of a run");
+    else if (key == "peaks") {  // internal (solve_many's keep="peaks"): an (m, n) sparse D, or None
+      opt.peaks = !v.is_none();
+      if (opt.peaks) opt.peak_measures = v.cast<nvib::SparseMatrix>();
+    } else raise_type_error(key, "not an option of a run");
   }
   opt.throw_on_failure = false;  // Python raises from the failure, with the partial result
   opt.keep_partial = true;
@@ -196,6 +200,8 @@ inline void bind_run(py::module_& m) {
   m.attr("PIM_MAX_DOFS") = nvib::kPimMaxDofs;
   m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
         "the number of steps of a run (t_end - t0)/dt, rounded up unless an integer to round-off");
+  m.def("run_steps", &nvib::run_steps, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
+        "steps_to_reach for a whole run (solve): a step longer than the run is refused naming dt");
   m.def(
       "solve",
       [](PyModel& model, py::object scheme, double dt, double t_end, double t0, const Vector& u0, const Vector& v0,
@@ -221,7 +227,9 @@ inline void bind_run(py::module_& m) {
       },
       py::arg("model"), py::arg("scheme"), py::arg("dt"), py::arg("t_end"), py::arg("t0"), py::arg("u0"),
       py::arg("v0"), py::arg("options"), py::arg("progress"),
-      "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end; NaN limits mean the defaults.");
+      "The one loop (C++): integrate model with scheme from (t0, u0, v0) to t_end with the options given (the "
+      "others SolveOptions' defaults; NaN limits mean the defaults). options['peaks']: None, or an (m, n) sparse "
+      "matrix D: Result._peaks is then (max |u_i|, max |D u|) over every step.");
 
   py::class_<AnyStepper>(m, "Stepper", "Step-by-step integration; one thread at a time.")
       .def(py::init(&make_stepper), py::arg("model"), py::arg("scheme"), py::arg("dt"))

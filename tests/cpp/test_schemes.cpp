@@ -289,5 +289,25 @@ int main() {
 
   CHECK(nvib::steps_to_reach(0.0, 0.3, 1e-3) == 300);
   CHECK(nvib::steps_to_reach(0.0, 1.0, 0.3) == 4);
+
+  // Peaks tracked over every step whatever save_every: max |u_i| and max |D u| equal those of the history
+  // saved every step, while only steps 0, 1000, 2000 and the last are saved.
+  {
+    auto model = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(2)), Hardening{});
+    const Vector u0 = (Vector(2) << 1.5, -0.4).finished(), v0 = Vector::Zero(2);
+    const auto full = nvib::solve(model, nvib::Newmark(), 1e-3, 2.5, u0, v0);
+    nvib::SolveOptions opt;
+    opt.save_every = 1000;
+    opt.peaks = true;
+    opt.peak_measures.resize(1, 2);
+    opt.peak_measures.insert(0, 0) = -1.0;
+    opt.peak_measures.insert(0, 1) = 1.0;
+    const auto sparse = nvib::solve(model, nvib::Newmark(), 1e-3, 2.5, u0, v0, opt);
+    CHECK(sparse.t.size() == 4);
+    CHECK(sparse.peak_u.size() == 2 && sparse.peak_measures.size() == 1);
+    CHECK(sparse.peak_u == full.u.cwiseAbs().colwise().maxCoeff().transpose());
+    CHECK(sparse.peak_measures[0] == (full.u.col(1) - full.u.col(0)).cwiseAbs().maxCoeff());
+    CHECK(full.peak_u.size() == 0 && std::isnan(full.peak_energy_error));  // not asked for
+  }
   return nvib_test::finish("test_schemes");
 }

@@ -35,7 +35,7 @@ def public(cls) -> set:
 
 
 def test_the_stub_lists_every_member_of_result_and_no_other():
-    assert stub_class("Result") == public(nvib.Result)
+    assert {k for k in stub_class("Result") if not k.startswith("_")} == public(nvib.Result)
 
 
 def test_the_stub_lists_every_field_of_stats():

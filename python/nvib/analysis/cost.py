@@ -60,6 +60,7 @@ import time
 import numpy as np
 
 from .. import _checks, _core
+from .._errors import ArgumentError
 from .._labels import scheme_label
 from .._model import Model
 from .._schemes import check_scheme
@@ -166,10 +167,15 @@ def cost(model: Model, schemes, dts, *, t_end: float | None = None, dofs=None, r
         raise _checks.value_error("schemes", "give at least one scheme")
     for s in schemes:
         check_scheme("schemes", s)
-    dts = [_checks.real("dts", dt, positive=True) for dt in np.atleast_1d(np.asarray(dts, dtype=float)).tolist()]
+    dts = [_checks.number("dts", dt) for dt in np.atleast_1d(np.asarray(dts, dtype=float)).tolist()]
     if not dts:
         raise _checks.value_error("dts", "give at least one step")
     t_end = _t_end(model, t_end)
+    for dt in dts:  # the core's checks of a run's step, naming the list the step came from
+        try:
+            _core.run_steps(0.0, t_end, dt)
+        except ArgumentError as exc:
+            raise _checks.value_error("dts" if exc.argument == "dt" else exc.argument, exc.reason) from None
     cols = _dof_columns(model, dofs)
     repeats, long_run = _check_common(repeats, long_run)
     max_saved = _checks.integer("max_saved", max_saved, minimum=2)
@@ -340,6 +346,7 @@ def _scipy_row(solve_ivp, model, method, rtol, scale, y0, t_eval, t_end, cols, r
 
 def cheapest(rows: list[dict], target: float, *, contender: str | None = None) -> dict | None:
     """The successful row with max_error <= target and the least wall time (of one contender if given)."""
+    target = _checks.real("target", target, positive=True)
     ok = [r for r in rows if r["status"] == "success" and r["max_error"] <= target
           and (contender is None or r["contender"] == contender)]
     return min(ok, key=lambda r: r["wall_time"]) if ok else None
@@ -350,6 +357,7 @@ def time_at_error(rows: list[dict], target: float) -> dict:
     log(time) against log(error) between the two runs (in order of dt or rtol) where the error first
     falls to the target; NaN when the curve never reaches it. Less tied to the grid of dt or rtol
     than ``cheapest``."""
+    target = _checks.real("target", target, positive=True)
     out = {}
     groups: dict = {}
     for r in rows:
@@ -411,6 +419,8 @@ def work_precision_figure(rows: list[dict], *, title: str | None = None, target:
     """Work-precision diagram: log max_error against log wall time, one line per (contender, label), points
     in order of dt or rtol. Failed runs are counted in the legend, not drawn. ``target`` draws a dashed
     line at that error and marks the cheapest run of each contender (nvib, SciPy) that reaches it with a star."""
+    if target is not None:
+        target = _checks.real("target", target, positive=True)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

@@ -12,6 +12,7 @@ import numpy as np
 from .. import _checks
 from .._batch import RunError, solve_many
 from .._labels import scheme_label
+from .._model import Model
 from .._records import GroundMotion
 
 __all__ = ["IDA", "ida"]
@@ -112,6 +113,27 @@ def _measure(summary, measure: str) -> float:
                                          f"({', '.join(summary.peak_measures) or 'none named'}), got {measure!r}")
 
 
+def _check_measure(model, measure) -> None:
+    """The measure, before any run (a run that collapses has none to look it up in): "peak_drift" (which
+    needs a named effect with a measure), "peak_u" or the name of an effect with a measure."""
+    if not isinstance(model, Model):
+        raise _checks.type_error("model", f"expected a Model, got {type(model).__name__}")
+    if not isinstance(measure, str):
+        raise _checks.type_error("measure", f"expected 'peak_drift', 'peak_u' or an effect's name, got {measure!r}")
+    named = [e.name for e in model.effects or [] if e.name and not e.is_load]
+    named += [a.name for a in model.effect_arrays if a.name and not a.is_load]
+    if measure == "peak_u" or measure in named:
+        return
+    if measure == "peak_drift":
+        if not named:
+            raise _checks.value_error("measure", "peak_drift needs named effects (storeys) with a measure")
+        return
+    raise _checks.value_error("measure", f"expected 'peak_drift', 'peak_u' or the name of an effect "
+                                         f"({', '.join(dict.fromkeys(named)) or 'none named'})"
+                                         f"{_checks.suggestion(measure, ['peak_drift', 'peak_u', *named])}, "
+                                         f"got {measure!r}")
+
+
 def ida(model, records, scales, *, scheme=None, dt: float, t_end: float | None = None, measure: str = "peak_drift",
         threads: int | None = None, progress: bool = True) -> IDA:
     """Run ``model`` under every record of ``records`` (GroundMotions) at every factor of ``scales``
@@ -128,6 +150,7 @@ def ida(model, records, scales, *, scheme=None, dt: float, t_end: float | None =
     scales = np.sort(_checks.real_array("scales", scales))
     if scales.ndim != 1 or scales.size == 0:
         raise _checks.value_error("scales", "expected a list of scale factors")
+    _check_measure(model, measure)
     scheme = nvib.CEMDTS() if scheme is None else scheme
     t_end = max(float(r.t[-1]) for r in records) if t_end is None else _checks.real("t_end", t_end, positive=True)
     batch = solve_many(model, scheme, dt=dt, t_end=t_end, ground_motions=records, scales=list(scales),

@@ -158,6 +158,7 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
     if accuracy < MIN_ACCURACY:
         raise _checks.value_error("accuracy", f"must be >= {MIN_ACCURACY:g} (below it the round-off of the millions "
                                               f"of steps it takes is as large as the error asked for), got {accuracy:g}")
+    max_halvings = _checks.integer("max_halvings", max_halvings, minimum=0)
     scheme = nvib.Newmark() if scheme is None else scheme
     given_t_end = t_end is not None
     t_end = float(record.t[-1] + 2.0 * periods.max()) if t_end is None else _checks.real("t_end", t_end, positive=True)
@@ -172,7 +173,7 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
     Sd, Sa, err = np.zeros(periods.size), np.zeros(periods.size), np.full(periods.size, np.inf)
     wall = 0.0
     todo = np.arange(periods.size)
-    for _ in range(max_halvings + 1):
+    for attempt in range(max_halvings + 1):
         for dt in np.unique(dts[todo]):
             idx = todo[dts[todo] == dt]
             runs, times = _run(record, periods[idx], float(dt), damping, law, scheme, t_end, threads)
@@ -187,7 +188,9 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
                 ref = np.array([r[0] for r in half])
             del times
             err[idx] = np.abs(Sd[idx] - ref) / np.maximum(ref, 1e-300)
-        todo = todo[err[todo] > accuracy]
+        todo = todo[~(err[todo] <= accuracy)]  # a NaN error (an inf or NaN peak) misses the accuracy too
+        if attempt == max_halvings:  # dt stays the step of the last runs, whose error err holds
+            break
         if todo.size:  # a period whose halved step would not fit in memory keeps the error it reached
             steps, inverse, counts = np.unique(dts[todo], return_inverse=True, return_counts=True)
             fits = np.array([_memory_needed(n, 2.0 * t_end / dt, exact) <= limit for dt, n in zip(steps, counts)])

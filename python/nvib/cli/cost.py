@@ -103,7 +103,7 @@ def run(args) -> int:
         raise c.Usage("--dt", f"the scene {name!r} sets no dt; give --dt")
     for dt in dts:  # a step count beyond 64 bits names the flag given (or the scene's key), not the library's dt
         try:
-            _core.steps_to_reach(0.0, t_end, dt)
+            _core.run_steps(0.0, t_end, dt)
         except (ValueError, OverflowError) as exc:
             raise step_error(exc, args, model) from None
     methods = [] if args.no_scipy else (args.scipy or list(SCIPY_METHODS))

@@ -38,11 +38,14 @@ def demo_schemes():
 
 
 def check_dt(dt: float) -> None:
-    """dt must be finite, > 0 and leave at most MAX_STEPS steps over T_END."""
+    """dt must be finite, > 0, at most T_END (a longer step would carry the run past it) and leave at most
+    MAX_STEPS steps over T_END."""
     from . import _common as c
 
     if not (math.isfinite(dt) and dt > 0):
         raise c.Usage("--dt", f"must be a finite number > 0, got {dt!r}")
+    if dt > T_END:
+        raise c.Usage("--dt", f"must be <= t_end = {T_END:g} s (a longer step would end the run past it), got {dt:g}")
     if T_END / dt > MAX_STEPS:
         raise c.Usage("--dt", f"must be >= {T_END / MAX_STEPS:g} s (at most {MAX_STEPS} steps over t_end = "
                               f"{T_END:g} s), got {dt:g}")

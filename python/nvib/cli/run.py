@@ -137,7 +137,7 @@ def run(args) -> int:
     if t_end is None:
         raise c.Usage("--t-end", f"the scene {model.scene['name']!r} sets no t_end; give --t-end")
     try:
-        n_steps = _core.steps_to_reach(0.0, t_end, dt)
+        n_steps = _core.run_steps(0.0, t_end, dt)
     except (ValueError, OverflowError) as exc:
         raise step_error(exc, args, model) from None
     save_every = args.save_every if args.save_every is not None else max(1, math.ceil(n_steps / MAX_SAVED))

@@ -62,6 +62,7 @@ def chain(n: int, *, mass: float = 1e5, k0: float = 1e8, a: float = 10.0, dampin
     if c > 0.0:
         effects.insert(1, {"type": "damper", "name": "dampers", "i": idx, "j": idx - 1, "c": c})
     dt = 0.2 * math.sqrt(mass / k0) if dt is None else _checks.real("dt", dt, positive=True)
+    t_end = _checks.real("t_end", t_end, positive=True)
     model = Model(np.full(n, float(mass)), effects=effects, dofs=NumberedNames("x", n, start=1), name=f"chain({n})")
     model.scene = _scene(f"chain({n})", f"Shear chain of {n} storeys, a_g = {ag_amplitude:g} sin({ag_omega:g} t)",
                          dt, t_end, "x1")
@@ -101,6 +102,7 @@ def lattice(nx: int, ny: int, *, mass: float = 1.0, k: float = 1e4, k3: float = 
     n = nx * ny
     omega_max = math.sqrt((8.0 * k + max(k_ground, 0.0)) / mass)
     dt = 0.2 * 2.0 / omega_max if dt is None else _checks.real("dt", dt, positive=True)
+    t_end = _checks.real("t_end", t_end, positive=True)
     model = Model(np.full(n, float(mass)), effects=effects, dofs=GridNames("n", nx, ny), name=f"lattice({nx}x{ny})")
     model.scene = _scene(f"lattice({nx}x{ny})", f"Mass-spring lattice {nx} x {ny}, cubic ties, "
                          f"a_g = {ag_amplitude:g} sin({ag_omega:g} t)", dt, t_end, model.dofs[n // 2])

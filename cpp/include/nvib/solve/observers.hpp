@@ -6,6 +6,7 @@
 //                  error, the powers integrated every step by the trapezoidal rule; the energy check
 //   EffectRecorder named effects: measure, rate, force and internal variables at the saved steps
 //   CollapseWatch  a law that lost its strength, or an effect with memory deformed beyond a limit
+//   PeakTracker    max |u_i| and max |D u| (named measures) over every accepted step, saved or not
 #pragma once
 
 #include <cmath>
@@ -110,8 +111,10 @@ Failure energy_failure(const Stepper& st, std::int64_t step, double balance, dou
 template <class Model>
 class EnergyAccount {
  public:
-  EnergyAccount(Result& res, Model& model, std::int64_t nsave, double limit, double h)
-      : res_(res), model_(model), limit_(limit), h_(h), check_(limit < std::numeric_limits<double>::infinity()) {
+  // track: the relative balance error over every step (saved or not) into Result::peak_energy_error.
+  EnergyAccount(Result& res, Model& model, std::int64_t nsave, double limit, double h, bool track = false)
+      : res_(res), model_(model), limit_(limit), h_(h), check_(limit < std::numeric_limits<double>::infinity()),
+        track_(track) {
     res.energy.resize(nsave, kEnergyColumns);
   }
   template <class Stepper>
@@ -123,6 +126,10 @@ class EnergyAccount {
     const double ek = model_.kinetic(st.v()), ep = model_.potential(st.u(), st.time());
     e0_ = ek + ep;
     escale_ = std::abs(ek) + std::abs(ep);
+    if (track_) {
+      energies(st);
+      track();
+    }
   }
   // After accepted step i: false (with the failure) when the balance check stops the run.
   template <class Stepper>
@@ -145,6 +152,10 @@ class EnergyAccount {
         failure = energy_failure(st, i, balance, escale_, limit_);
         return false;
       }
+    }
+    if (track_) {
+      if (!have_) energies(st);
+      track();
     }
     return true;
   }
@@ -169,10 +180,22 @@ class EnergyAccount {
     have_ = true;
   }
 
+  // The relative balance error so far, as relative_balance_error() of a history saved every step: the largest
+  // |balance error| over the largest |kinetic| + |potential| + |work in| + |dissipated| + |hysteretic|.
+  void track() {
+    const double parts = std::abs(ek_) + std::abs(ep_) + std::abs(work_) + std::abs(diss_) + std::abs(hyst_);
+    const double balance = ek_ + ep_ + diss_ + hyst_ - work_ - e0_;
+    if (!std::isfinite(parts) || !std::isfinite(balance)) blown_ = true;
+    worst_ = std::max(worst_, std::abs(balance));
+    parts_ = std::max(parts_, parts);
+    res_.peak_energy_error = blown_ ? std::numeric_limits<double>::infinity() : (parts_ > 0.0 ? worst_ / parts_ : 0.0);
+  }
+
   Result& res_;
   Model& model_;
   double limit_, h_;
-  bool check_, sided_ = false, have_ = false;
+  bool check_, track_, sided_ = false, have_ = false, blown_ = false;
+  double worst_ = 0.0, parts_ = 0.0;
   // powers at the last state, integrals so far, the initial total and the scale
   double p_in_ = 0.0, p_diss_ = 0.0, work_ = 0.0, diss_ = 0.0, e0_ = 0.0, escale_ = 0.0, hyst0_ = 0.0;
   double ek_ = 0.0, ep_ = 0.0, hyst_ = 0.0;  // of the current state, when have_
@@ -267,6 +290,32 @@ class CollapseWatch {
   const effects::EffectSet& set_;
   double limit_;
   bool fails_;
+};
+
+// The peaks of a run over every accepted step (SolveOptions::peaks): a summary that needs no history.
+class PeakTracker {
+ public:
+  PeakTracker(Result& res, const SolveOptions& opt, Index n) : res_(res), D_(opt.peak_measures) {
+    NVIB_CHECK(D_.rows() == 0 || D_.cols() == n, "peak_measures",
+               "expected " + std::to_string(n) + " columns (one per DOF), got " + std::to_string(D_.cols()));
+    res.peak_u = Vector::Zero(n);
+    res.peak_measures = Vector::Zero(D_.rows());
+    d_.resize(D_.rows());
+  }
+  template <class Stepper>
+  void update(const Stepper& st) {
+    const Vector& u = st.u();
+    res_.peak_u = res_.peak_u.cwiseMax(u.cwiseAbs());
+    if (D_.rows() > 0) {
+      d_.noalias() = D_ * u;
+      res_.peak_measures = res_.peak_measures.cwiseMax(d_.cwiseAbs());
+    }
+  }
+
+ private:
+  Result& res_;
+  const SparseMatrix& D_;
+  Vector d_;
 };
 
 }  // namespace observe

@@ -48,6 +48,12 @@ struct SolveOptions {
   // runs on (a failed law then carries no force).
   double collapse_deformation = std::numeric_limits<double>::quiet_NaN();
   bool stop_at_collapse = true;
+  // Track the peaks over every accepted step, whatever save_every: max |u_i| of every DOF and, for each
+  // row of peak_measures (an m x n matrix, m >= 0), max |row . u| (a named effect's measure, a storey's
+  // drift), into Result::peak_u and Result::peak_measures; with energy, the relative balance error over
+  // every step too (Result::peak_energy_error).
+  bool peaks = false;
+  SparseMatrix peak_measures;
 };
 
 // Columns of Result::energy: dissipated by the viscous laws (dampers), hysteretic by the laws with
@@ -85,6 +91,11 @@ struct Result {
   // single solve is exact up to round-off). Newton keeps it below about rtol;
   // iteration = none reports here what it leaves unbalanced.
   double max_residual = std::numeric_limits<double>::quiet_NaN();
+  // With SolveOptions::peaks: the peaks over every accepted step (the saved ones or not), from t0; empty
+  // otherwise.
+  Vector peak_u, peak_measures;
+  // With SolveOptions::peaks and energy: the relative energy balance error over every step (NaN otherwise).
+  double peak_energy_error = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The energy check's default limit: half the energy scale. A sound run's
@@ -120,6 +131,16 @@ inline std::int64_t steps_to_reach(double t0, double t_end, double dt) {
   const double nearest = std::round(r);
   if (std::abs(r - nearest) <= 1e-9 * std::max(1.0, r)) return std::max<std::int64_t>(1, static_cast<std::int64_t>(nearest));
   return static_cast<std::int64_t>(std::ceil(r));
+}
+
+// The steps of a run from t0 to t_end (solve): steps_to_reach's, and a step longer than the run is
+// refused: the run would end at t0 + dt, past t_end, without a word.
+inline std::int64_t run_steps(double t0, double t_end, double dt) {
+  const std::int64_t n = steps_to_reach(t0, t_end, dt);
+  NVIB_CHECK(n > 1 || (t_end - t0) / dt >= 1.0 - 1e-9, "dt",
+             "the step " + detail::fmt(dt) + " is longer than the run (t_end - t0 = " + detail::fmt(t_end - t0) +
+                 "), which would end at t = " + detail::fmt(t0 + dt) + ", past t_end; give dt <= t_end - t0");
+  return n;
 }
 
 // What leaves integrate() and solve() with SolveOptions::keep_partial when the step loop throws: the

@@ -165,7 +165,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   using Model = std::decay_t<decltype(model)>;
   observe::SavedHistory history(res, opt, n, nsave);
   std::optional<observe::EnergyAccount<Model>> energy;
-  if (opt.energy) energy.emplace(res, model, nsave, energy_limit, st.dt());
+  if (opt.energy) energy.emplace(res, model, nsave, energy_limit, st.dt(), opt.peaks);
   std::optional<observe::EffectRecorder> recorder;
   if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, nsave);
   NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
@@ -175,6 +175,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     collapse.emplace(*set, opt.collapse_deformation);
     if (!collapse->active()) collapse.reset();
   }
+  std::optional<observe::PeakTracker> peaks;
+  if (opt.peaks) peaks.emplace(res, opt, n);
   Index row = 0;
   auto save = [&] {
     history.save(st, row);
@@ -184,6 +186,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   };
   if (energy) energy->start(st);
   save();
+  if (peaks) peaks->update(st);
 
   const Stats before = st.stats();
   const double bound = std::isnan(opt.max_displacement) ? default_max_displacement(st.u(), st.v(), t_end - st.time())
@@ -229,10 +232,14 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       }
       if (s != Status::success) {
         res.status = s;
-        if (s == Status::collapsed) save();  // the state it collapsed in
+        if (s == Status::collapsed) {  // the state it collapsed in
+          save();
+          if (peaks) peaks->update(st);
+        }
         break;
       }
       done = i;
+      if (peaks) peaks->update(st);
       if (saving) {
         save();
         to_save = k;
@@ -279,7 +286,7 @@ Result solve(const ModelT& model, const Scheme& scheme, double dt, double t_end,
              const Vector& v0, const SolveOptions& opt = {}, Observer&& observe = Observer{}) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
-  steps_to_reach(opt.t0, t_end, dt);  // validate before any work
+  run_steps(opt.t0, t_end, dt);  // validate before any work
   auto st = make_stepper(scheme, model, dt);
   st.initialize(opt.t0, u0, v0);
   const Stats init = st.stats();
