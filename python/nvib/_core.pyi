@@ -140,6 +140,7 @@ class Model:
     accounts_energy: bool
     num_evaluated_effects: int
     effects: list[Effect]
+    warnings: list[str]
     mass_matrix: Array
     K: Array
     C: Array

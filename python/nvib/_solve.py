@@ -61,10 +61,11 @@ def _extras(self) -> dict:
 
 def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
     """What the Python layer knows about a run beside its history: the ground motions under the model
-    (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings."""
+    (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings (the
+    model's own, an energy balance error)."""
     idx = np.asarray(res.dof_indices, dtype=int)
     units = model._units if isinstance(model._units, str) else [model._units[k] for k in idx]
-    warnings = []
+    warnings = list(model.warnings)
     if res.energy is not None and len(res.t) > 1:
         with np.errstate(all="ignore"):
             rel = res.energy.relative_balance_error()
@@ -88,7 +89,8 @@ Result.units = property(
     doc="the unit of each saved DOF's displacement (the model's ``units``; time is in s)")
 Result.warnings = property(
     lambda self: list(_extras(self).get("warnings", ())),
-    doc="what a run that did not fail still wants said, e.g. an energy balance error above "
+    doc="what a run still wants said: the model's own warnings (``Model.warnings``: a nearly singular mass, "
+        "a nearly symmetric K or C), an energy balance error above "
         "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
 
 

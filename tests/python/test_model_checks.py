@@ -1,0 +1,108 @@
+"""Real models are checked: a stiffness or damping stored as one triangle, a mass that is singular,
+indefinite or nearly singular."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sps
+
+import nvib
+
+FULL = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
+
+
+# ---------------------------------------------------------------- one triangle of K or C
+
+@pytest.mark.parametrize("part", ["K", "C"])
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
+def test_one_triangle_of_a_linear_part_is_refused_naming_it(part, sparse):
+    """A stiffness or damping stored as one triangle with its diagonal (as some programs write a symmetric
+    matrix) would be solved as another matrix: refused, naming it."""
+    for tri, side in ((np.triu(FULL), "above"), (np.tril(FULL), "below")):
+        with pytest.raises(nvib.ArgumentError, match=rf"^{part}: the matrix has entries {side} its diagonal and "
+                                                     r"on its diagonal only \(one triangle") as exc:
+            nvib.Model(np.ones(3), **{part: sps.csc_matrix(tri) if sparse else tri})
+        assert exc.value.argument == part
+
+
+@pytest.mark.parametrize("part", ["K", "C"])
+def test_non_symmetric_and_one_sided_linear_parts_stay_accepted(part):
+    """Entries on both sides (follower forces, gyroscopic terms) and a strictly triangular coupling without a
+    diagonal (a one-sided coupling), also with grounded springs or dampers on the diagonal, are legitimate."""
+    gyro = FULL + np.array([[0.0, 0.5, 0.0], [-0.5, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    one_sided = np.triu(np.ones((3, 3)), 1)
+    for A in (gyro, one_sided, sps.csc_matrix(one_sided)):
+        assert nvib.Model(np.ones(3), **{part: A}).warnings == []
+    law = {"K": {"type": "spring", "i": [0, 1, 2], "k": 1e3}, "C": {"type": "damper", "i": [0, 1, 2], "c": 1.0}}
+    model = nvib.Model(np.ones(3), **{part: one_sided}, effects=[law[part]])
+    assert model.warnings == []
+
+
+@pytest.mark.parametrize("part", ["K", "C"])
+def test_a_nearly_symmetric_linear_part_is_accepted_with_a_warning(part):
+    """A K or C symmetric up to 1e-8 of its entries is taken as given, but every run says it looks like
+    round-off in an assembly meant to be symmetric."""
+    A = FULL.copy()
+    A[0, 1] = -1.0 + 2.0 ** -43  # 1.1e-13 off, exactly
+    model = nvib.Model(np.ones(3), **{part: A}, dofs=["a", "b", "c"])
+    assert len(model.warnings) == 1
+    assert model.warnings[0].startswith(f"{part}: the matrix is symmetric only up to 5.68434e-14 of its largest "
+                                        f"entry (|{part}[1, 0] - {part}[0, 1]| = 1.13687e-13)")
+    assert "round-off" in model.warnings[0]
+    res = nvib.solve(model, nvib.Newmark(), dt=0.01, t_end=0.05)
+    assert res.warnings == model.warnings
+    assert nvib.Model(np.ones(3), **{part: FULL}).warnings == []
+    A[0, 1] += 1e-3  # plainly non-symmetric: no warning
+    assert nvib.Model(np.ones(3), **{part: A}).warnings == []
+
+
+# ---------------------------------------------------------------- the mass
+
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
+def test_a_singular_mass_names_the_dof_without_mass(sparse):
+    kind = "sparse" if sparse else "dense"
+    wrap = sps.csc_matrix if sparse else np.asarray
+    # a DOF with no mass on the diagonal (coupled to the others)
+    M = np.array([[1.0, 0.0, 0.1], [0.0, 0.0, 0.2], [0.1, 0.2, 1.0]])
+    with pytest.raises(nvib.ArgumentError, match=rf"^mass: the {kind} mass matrix is not positive definite: it is "
+                                                 r"singular: DOF 1 \(b\) has no mass") as exc:
+        nvib.Model(wrap(M), dofs=["a", "b", "c"])
+    assert exc.value.argument == "mass"
+    # a row that depends on the rows before it: the pivot of DOF 1 is 0
+    M = np.array([[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    with pytest.raises(nvib.ArgumentError, match=rf"^mass: the {kind} mass matrix is not positive definite: it is "
+                                                 r"singular: the pivot of DOF 1 \(b\) after eliminating the DOFs "
+                                                 r"before it is 0"):
+        nvib.Model(wrap(M), dofs=["a", "b", "c"])
+
+
+@pytest.mark.parametrize("sparse", [False, True], ids=["dense", "sparse"])
+def test_an_indefinite_mass_names_the_negative_pivot(sparse):
+    kind = "sparse" if sparse else "dense"
+    wrap = sps.csc_matrix if sparse else np.asarray
+    with pytest.raises(nvib.ArgumentError, match=rf"^mass: the {kind} mass matrix is not positive definite: it is "
+                                                 r"indefinite: the pivot of DOF 1 \(u1\) after eliminating the DOFs "
+                                                 r"before it is -3 < 0"):
+        nvib.Model(wrap(np.array([[1.0, 2.0], [2.0, 1.0]])))
+    with pytest.raises(nvib.ArgumentError, match=r"indefinite: DOF 1 \(y\) has the negative mass -1 on the diagonal"):
+        nvib.Model(wrap(np.array([[1.0, 0.1], [0.1, -1.0]])), dofs=["x", "y"])
+    with pytest.raises(nvib.ArgumentError, match=r"^mass: entry 1 is -1, every mass must be > 0 \(DOF 1 \(y\)\)"):
+        nvib.Model([1.0, -1.0], dofs=["x", "y"])
+
+
+@pytest.mark.parametrize("form", ["lumped", "dense", "sparse"])
+def test_a_nearly_singular_mass_is_accepted_with_a_warning_naming_the_dof(form):
+    if form == "lumped":
+        M = np.array([1.0, 2.0, 1e-14])
+        which = "the mass of DOF 2 (c) is 1e-14"
+    else:
+        M = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 1.0], [0.0, 1.0, 1.0 + 1e-14]])
+        M = sps.csc_matrix(M) if form == "sparse" else M
+        which = "the Cholesky pivot of DOF"
+    model = nvib.Model(M, K=np.eye(3), dofs=["a", "b", "c"])
+    assert len(model.warnings) == 1
+    w = model.warnings[0]
+    assert w.startswith("mass: the mass matrix is nearly singular: ") and which in w
+    if form != "lumped":
+        assert "DOF 1 (b)" in w or "DOF 2 (c)" in w
+    assert nvib.solve(model, nvib.Newmark(), dt=0.01, t_end=0.02).warnings == model.warnings
+    assert nvib.Model(np.ones(3), K=np.eye(3)).warnings == []
