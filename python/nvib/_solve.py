@@ -59,13 +59,33 @@ def _extras(self) -> dict:
     return self._extras if isinstance(self._extras, dict) else {}
 
 
-def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
+def _step_note(model: Model, scheme, dt: float) -> str | None:
+    """The warning of an explicit run whose dt is above the scheme's (damped) stability limit on the
+    model's linear part (``nvib.stability.step_warning``); None for every other run."""
+    if getattr(scheme, "is_explicit", False) is not True or not isinstance(getattr(scheme, "key", None), str):
+        return None
+    from .analysis import stability
+
+    return stability.step_warning(model, scheme, dt)
+
+
+def _failure_error(res: Result, note: str | None):
+    """The exception of a failed run; a divergence says why dt was expected to diverge when it was."""
+    exc = error_for(res.failure, res)
+    if note and res.status == Status.diverged:
+        exc.args = (f"{exc.args[0]}; {note}",) + tuple(exc.args[1:])
+    return exc
+
+
+def _annotate(res: Result, model: Model, warn_energy_error: float, note: str | None = None) -> Result:
     """What the Python layer knows about a run beside its history: the ground motions under the model
     (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings (the
-    model's own, an energy balance error)."""
+    model's own, a dt above the stability limit, an energy balance error)."""
     idx = np.asarray(res.dof_indices, dtype=int)
     units = model._units if isinstance(model._units, str) else [model._units[k] for k in idx]
     warnings = list(model.warnings)
+    if note:
+        warnings.append(note)
     if res.energy is not None and len(res.t) > 1:
         with np.errstate(all="ignore"):
             rel = res.energy.relative_balance_error()
@@ -90,7 +110,8 @@ Result.units = property(
 Result.warnings = property(
     lambda self: list(_extras(self).get("warnings", ())),
     doc="what a run still wants said: the model's own warnings (``Model.warnings``: a nearly singular mass, "
-        "a nearly symmetric K or C), an energy balance error above "
+        "a nearly symmetric K or C), a dt above an explicit scheme's stability limit on the model's linear "
+        "part, damping included (``nvib.stability.step_warning``), an energy balance error above "
         "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
 
 
@@ -146,7 +167,7 @@ Energy.__repr__ = _energy_repr
 
 
 @contextlib.contextmanager
-def _partial_annotated(model: Model, warn: float):
+def _partial_annotated(model: Model, warn: float, note: str | None = None):
     """A run stopped by an exception (Ctrl-C, an error in a Python callback) carries the history saved
     before it as ``exc.result``: annotated like any result (units, ground, warnings)."""
     try:
@@ -154,7 +175,7 @@ def _partial_annotated(model: Model, warn: float):
     except BaseException as exc:
         partial = getattr(exc, "result", None)
         if isinstance(partial, Result):
-            _annotate(partial, model, warn)
+            _annotate(partial, model, warn, note)
         raise
 
 
@@ -277,10 +298,12 @@ class Stepper:
         opts = _run_options(self.model, save_every, dofs, max_displacement, progress, energy, max_energy_error,
                             record, collapse_deformation, stop_at_collapse)
         warn = _warning_level(warn_energy_error)
-        with _partial_annotated(self.model, warn):
-            res = _annotate(self._st.integrate(t_end, **opts), self.model, warn)
+        if not hasattr(self, "_note"):
+            self._note = _step_note(self.model, self.scheme, self.dt)
+        with _partial_annotated(self.model, warn, self._note):
+            res = _annotate(self._st.integrate(t_end, **opts), self.model, warn, self._note)
         if throw and not res.success and res.status != Status.collapsed:
-            raise error_for(res.failure, res)
+            raise _failure_error(res, self._note)
         return res
 
 
@@ -307,8 +330,12 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     run whose state becomes non-finite or whose |u_i| exceeds
     ``max_displacement`` (default: ``default_max_displacement``, 1e10 times
     the scale of the initial state; ``math.inf`` for none) stops within one
-    step with status ``Status.diverged``. An implicit step whose equilibrium
-    iteration does not converge stops the run with ``Status.newton_failed``
+    step with status ``Status.diverged``. An explicit scheme whose dt is
+    above its stability limit on the model's linear part (damping included:
+    a heavily damped top mode shrinks it) is run, but ``Result.warnings``
+    and the DivergenceError say so (``nvib.stability.step_warning``). An
+    implicit step whose equilibrium iteration does not converge stops the
+    run with ``Status.newton_failed``
     (the residual history in the failure); the ``incremental`` and
     ``one_iteration`` modes never iterate and report what they leave
     unbalanced in ``Result.max_residual``. If (t_end - t0)/dt is not an
@@ -348,8 +375,9 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
     opts = _run_options(model, save_every, dofs, max_displacement, progress, energy, max_energy_error, record,
                         collapse_deformation, stop_at_collapse)
     warn = _warning_level(warn_energy_error)
-    with _partial_annotated(model, warn):
-        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn)
+    note = _step_note(model, scheme, dt)
+    with _partial_annotated(model, warn, note):
+        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, **opts), model, warn, note)
     if throw and not res.success and res.status != Status.collapsed:
-        raise error_for(res.failure, res)
+        raise _failure_error(res, note)
     return res

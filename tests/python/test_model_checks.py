@@ -1,11 +1,14 @@
 """Real models are checked: a stiffness or damping stored as one triangle, a mass that is singular,
-indefinite or nearly singular."""
+indefinite or nearly singular, a damped top mode that shrinks an explicit scheme's step limit."""
+
+import math
 
 import numpy as np
 import pytest
 import scipy.sparse as sps
 
 import nvib
+from nvib import stability as stab
 
 FULL = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
 
@@ -106,3 +109,77 @@ def test_a_nearly_singular_mass_is_accepted_with_a_warning_naming_the_dof(form):
         assert "DOF 1 (b)" in w or "DOF 2 (c)" in w
     assert nvib.solve(model, nvib.Newmark(), dt=0.01, t_end=0.02).warnings == model.warnings
     assert nvib.Model(np.ones(3), K=np.eye(3)).warnings == []
+
+
+# ---------------------------------------------------------------- the damped step limit
+
+def _rayleigh_chain(n=20, k=1e4, m=1.0, beta=0.1):
+    K = sps.diags([np.full(n - 1, -k), np.full(n, 2 * k), np.full(n - 1, -k)], [-1, 0, 1]).tocsc()
+    M = np.full(n, m)
+    return nvib.Model(M, K=K, C=beta * K, u0=np.linspace(0.0, 1e-3, n))
+
+
+def test_stability_takes_overdamped_ratios():
+    """Central difference's limit 2(sqrt(1 + 4 xi^2) - 2 xi) (its damping force takes the predicted
+    velocity v_n + dt a_n; Zhai(1/2, 1/2) has the same) holds for xi >= 1 too: 230 000x below the undamped
+    limit at xi = 57 000. The amplification matrix and spectral radius take xi >= 1."""
+    for scheme in (nvib.CentralDifference(), nvib.CentralDifference(velocity="half_step"), nvib.Zhai()):
+        for xi in (1.0, 5.0, 57000.0):
+            assert stab.critical_omega_h(scheme, xi) == pytest.approx(
+                2.0 / (math.sqrt(1.0 + 4.0 * xi * xi) + 2.0 * xi), rel=1e-6)
+    assert 2.0 / stab.critical_omega_h(nvib.CentralDifference(), 57000.0) == pytest.approx(228000.0, rel=1e-5)
+    assert stab.spectral_radius(nvib.CentralDifference(), 0.06, xi=10.0) > 1.0
+    assert stab.spectral_radius(nvib.CentralDifference(), 0.045, xi=10.0) <= 1.0 + 1e-9
+    assert stab.amplification_matrix(nvib.CentralDifference(), 0.1, xi=2.0).shape == (3, 3)
+    with pytest.raises(nvib.ArgumentError, match="^xi: "):
+        stab.period_error(nvib.Newmark(), 1.0, xi=1.0)  # no oscillating principal pair
+
+
+def test_a_damped_top_mode_above_the_step_limit_is_named_before_the_run():
+    """Rayleigh damping that gives the top mode zeta ~ 10 shrinks central difference's limit ~40x: a run at
+    0.9 of the undamped limit diverges within a few steps, and says why."""
+    model = _rayleigh_chain()
+    w = model.linearized_frequencies()
+    top = w[-1]
+    zeta = 0.1 * top / 2.0
+    assert zeta > 9.0
+    dt = 0.9 * 2.0 / top
+    lim = stab.step_limit(model, nvib.CentralDifference())
+    assert lim.omega == pytest.approx(top, rel=1e-9) and lim.zeta == pytest.approx(zeta, rel=1e-9)
+    assert lim.dt == pytest.approx(2.0 / (top * (math.sqrt(1.0 + 4.0 * zeta ** 2) + 2.0 * zeta)), rel=1e-6)
+    assert lim.dt_undamped == pytest.approx(2.0 / top, rel=1e-6)
+    with pytest.raises(nvib.DivergenceError) as exc:
+        nvib.solve(model, nvib.CentralDifference(), dt=dt, t_end=1.0)
+    text = str(exc.value)
+    assert text.startswith("diverged at t = ")
+    assert f"dt = {dt:.4g} s is above the stability limit of" in text
+    assert f"dt <= {lim.dt:.4g} s" in text and f"zeta = {zeta:.4g}" in text and "damping shrinks" in text
+    res = exc.value.result
+    assert any("above the stability limit" in w for w in res.warnings)
+    # below the damped limit: no warning, no divergence, the same trajectory as before
+    ok = nvib.solve(model, nvib.CentralDifference(), dt=0.9 * lim.dt, t_end=0.05)
+    assert ok.success and ok.warnings == []
+
+
+@pytest.mark.parametrize("scheme", [nvib.Zhai(), nvib.CEMDTS(0.45)], ids=["zhai", "cemdts"])
+def test_other_explicit_schemes_have_their_own_damped_limit(scheme):
+    model = _rayleigh_chain(beta=0.01)
+    lim = stab.step_limit(model, scheme)
+    assert lim.dt < lim.dt_undamped
+    assert stab.step_warning(model, scheme, 0.95 * lim.dt) is None
+    assert "above the stability limit" in stab.step_warning(model, scheme, 1.05 * lim.dt)
+    res = nvib.solve(model, scheme, dt=1.05 * lim.dt, t_end=0.5, throw=False)
+    assert any("above the stability limit" in w for w in res.warnings)
+
+
+def test_implicit_schemes_and_pim_get_no_step_warning():
+    model = _rayleigh_chain()
+    for scheme in (nvib.Newmark(), nvib.GeneralizedAlpha(), nvib.PreciseIntegration()):
+        assert stab.step_limit(model, scheme) is None and stab.step_warning(model, scheme, 1.0) is None
+
+
+def test_an_undamped_model_above_its_limit_is_named():
+    model = nvib.Model([1.0], K=[[1e4]], u0=[1.0])
+    res = nvib.solve(model, nvib.CentralDifference(), dt=0.03, t_end=1.0, throw=False)
+    assert res.status == nvib.Status.diverged
+    assert len(res.warnings) == 1 and "dt <= 0.02 s, set by its mode of omega = 100 rad/s" in res.warnings[0]
