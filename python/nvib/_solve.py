@@ -308,7 +308,8 @@ class Stepper:
 
 
 def default_max_displacement(u, v, duration: float) -> float:
-    """The default divergence bound on |u_i|: 1e10 x max(1, max|u|, max|v| x duration).
+    """The default divergence bound on |u_i|: 1e10 x max(1, max|u|, max|v| x duration), for a model
+    without declared loads (solve() adds their static displacement to the scale: see there).
 
     Far beyond any physical response of the model started from (u, v), yet
     reached long before a diverging state overflows, so such a run stops with
@@ -328,8 +329,11 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. A
     run whose state becomes non-finite or whose |u_i| exceeds
-    ``max_displacement`` (default: ``default_max_displacement``, 1e10 times
-    the scale of the initial state; ``math.inf`` for none) stops within one
+    ``max_displacement`` (default: 1e10 times the run's displacement scale,
+    the largest of 1, max|u0|, max|v0| (t_end - t0) and the static
+    displacement of the declared loads over the run, so that a model in mm
+    or um, or loaded hard in its own units, is not called diverged where
+    the same model in m is not; ``math.inf`` for none) stops within one
     step with status ``Status.diverged``. An explicit scheme whose dt is
     above its stability limit on the model's linear part (damping included:
     a heavily damped top mode shrinks it) is run, but ``Result.warnings``

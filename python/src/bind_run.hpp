@@ -272,7 +272,9 @@ inline void bind_run(py::module_& m) {
   m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,
         "Matrix exponential by the 2^N algorithm of the precise integration method.");
   m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"));
-  m.def("default_max_displacement", &nvib::default_max_displacement, py::arg("u"), py::arg("v"), py::arg("duration"));
+  m.def("default_max_displacement",
+        [](const Vector& u, const Vector& v, double duration) { return nvib::default_max_displacement(u, v, duration); },
+        py::arg("u"), py::arg("v"), py::arg("duration"));
 }
 
 }  // namespace nvib_py

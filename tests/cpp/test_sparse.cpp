@@ -255,6 +255,17 @@ int main() {
     const auto follower = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(2)), springs, coupling);
     CHECK(follower.K().coeff(0, 0) == 10.0 && follower.K().coeff(0, 1) == 1.0);
   }
+  // The default divergence bound follows the static displacement of the loads: 2e11 here (a model in
+  // nm loaded to 200 m), so a stable run of it is not called diverged.
+  {
+    std::vector<fx::Effect> load{fx::constant_force({{0, 1.0}}, 200.0)};
+    const auto nm = fx::make_effect_model(nvib::Mass::diagonal(Vector::Constant(1, 1e-9)), load,
+                                          Matrix(Matrix::Constant(1, 1, 1e-9)), Matrix(Matrix::Constant(1, 1, 2e-10)));
+    const double scale = nvib::load_displacement_scale(nm, 0.0, 20.0);
+    CHECK(std::abs(scale - 200.0 / (1e-9 + 1e-9 / 400.0)) <= 1e-9 * scale);
+    const auto res = nvib::solve(nm, nvib::CentralDifference(), 0.05, 20.0, Vector::Zero(1), Vector::Zero(1));
+    CHECK(res.status == nvib::Status::success && res.u.cwiseAbs().maxCoeff() > 1e10);
+  }
   // Static equilibrium of the chain under a constant load on its last DOF: sparse and dense agree.
   {
     auto list = chain(n);

@@ -1,5 +1,6 @@
 """Real models are checked: a stiffness or damping stored as one triangle, a mass that is singular,
-indefinite or nearly singular, a damped top mode that shrinks an explicit scheme's step limit."""
+indefinite or nearly singular, a damped top mode that shrinks an explicit scheme's step limit, and the
+divergence bound of a model in other units or loaded hard in its own."""
 
 import math
 
@@ -183,3 +184,33 @@ def test_an_undamped_model_above_its_limit_is_named():
     res = nvib.solve(model, nvib.CentralDifference(), dt=0.03, t_end=1.0, throw=False)
     assert res.status == nvib.Status.diverged
     assert len(res.warnings) == 1 and "dt <= 0.02 s, set by its mode of omega = 100 rad/s" in res.warnings[0]
+
+
+# ---------------------------------------------------------------- the divergence bound
+
+def _loaded_oscillator(scale: float, load: str):
+    """m u'' + k u = F in units scale x m: the same physical model whatever the scale."""
+    if load == "force":
+        eff = [{"type": "constant_force", "measure": {"x": 1.0}, "value": 200.0}]
+    else:  # a ground acceleration of 200 m/s^2 (in the model's units)
+        eff = [{"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 200.0 * scale,
+                                                           "omega": 0.3}}]
+    return nvib.Model([1.0 / scale], K=[[1.0 / scale]], C=[[0.2 / scale]], effects=eff, dofs=["x"])
+
+
+@pytest.mark.parametrize("load", ["force", "ground"])
+def test_the_divergence_bound_follows_the_model_in_other_units(load):
+    """A stable run whose response is 1e11 in the model's own units (a model in nm loaded to about 100 m) is
+    not called diverged: the bound is relative to the static displacement of its loads. The same model in m
+    gives the same trajectory, scaled."""
+    ref = nvib.solve(_loaded_oscillator(1.0, load), nvib.CentralDifference(), dt=0.05, t_end=20.0)
+    nm = nvib.solve(_loaded_oscillator(1e9, load), nvib.CentralDifference(), dt=0.05, t_end=20.0)
+    assert np.abs(nm.u).max() > 1e10
+    np.testing.assert_allclose(nm.u, 1e9 * ref.u, rtol=1e-9, atol=1e-9 * np.abs(nm.u).max())
+
+
+def test_a_blow_up_of_a_loaded_model_is_still_caught_fast():
+    model = _loaded_oscillator(1e9, "force")
+    res = nvib.solve(model, nvib.CentralDifference(), dt=2.5, t_end=1000.0, throw=False)
+    assert res.status == nvib.Status.diverged and res.failure.step < 100
+    assert "beyond the bound" in res.failure.message and "displacement scale" in res.failure.message
