@@ -463,6 +463,13 @@ class Model:
         return self._core.is_linear
 
     @property
+    def warnings(self) -> list[str]:
+        """What the accepted model still wants said, each starting with the argument it is about: a nearly
+        singular mass (its DOF named), a K or C symmetric only up to round-off. Every run's
+        ``Result.warnings`` repeats them."""
+        return list(self._core.warnings)
+
+    @property
     def mass_matrix(self) -> np.ndarray:
         """The mass as a dense array (models of up to 2000 DOFs; see ``mass_sparse``)."""
         if self.n > 2000:

@@ -17,7 +17,9 @@ Result.units = property(
     doc="the unit of each saved DOF's displacement (the model's ``units``; time is in s)")
 Result.warnings = property(
     lambda self: list(_extras(self).get("warnings", ())),
-    doc="what a run that did not fail still wants said, e.g. an energy balance error above "
+    doc="what a run still wants said: the model's own warnings (``Model.warnings``: a nearly singular mass, "
+        "a nearly symmetric K or C), a dt above an explicit scheme's stability limit on the model's linear "
+        "part, damping included (``nvib.stability.step_warning``), an energy balance error above "
         "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
 Result.absolute_a = property(absolute_a, doc=absolute_a.__doc__)
 Result.to_pandas = to_pandas

@@ -61,12 +61,33 @@ def _extras(self) -> dict:
     return self._extras if isinstance(self._extras, dict) else {}
 
 
-def _annotate(res: Result, model: Model, warn_energy_error: float) -> Result:
+def _step_note(model: Model, scheme, dt: float) -> str | None:
+    """The warning of an explicit run whose dt is above the scheme's (damped) stability limit on the
+    model's linear part (``nvib.stability.step_warning``); None for every other run."""
+    if getattr(scheme, "is_explicit", False) is not True or not isinstance(getattr(scheme, "key", None), str):
+        return None
+    from .analysis import stability
+
+    return stability.step_warning(model, scheme, dt)
+
+
+def _failure_error(res: Result, note: str | None):
+    """The exception of a failed run; a divergence says why dt was expected to diverge when it was."""
+    exc = error_for(res.failure, res)
+    if note and res.status == Status.diverged:
+        exc.args = (f"{exc.args[0]}; {note}",) + tuple(exc.args[1:])
+    return exc
+
+
+def _annotate(res: Result, model: Model, warn_energy_error: float, note: str | None = None) -> Result:
     """What the Python layer knows about a run beside its history: the ground motions under the model
-    (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings."""
+    (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings (the
+    model's own, a dt above the stability limit, an energy balance error)."""
     idx = np.asarray(res.dof_indices, dtype=int)
     units = model._units if isinstance(model._units, str) else [model._units[k] for k in idx]
-    warnings = []
+    warnings = list(model.warnings)
+    if note:
+        warnings.append(note)
     if res.energy is not None and len(res.t) > 1:
         with np.errstate(all="ignore"):
             rel = res.energy.relative_balance_error()
@@ -129,7 +150,7 @@ Energy.__repr__ = _energy_repr
 
 
 @contextlib.contextmanager
-def _partial_annotated(model: Model, warn: float):
+def _partial_annotated(model: Model, warn: float, note: str | None = None):
     """A run stopped by an exception (Ctrl-C, an error in a Python callback) carries the history saved
     before it as ``exc.result``: annotated like any result (units, ground, warnings)."""
     try:
@@ -137,7 +158,7 @@ def _partial_annotated(model: Model, warn: float):
     except BaseException as exc:
         partial = getattr(exc, "result", None)
         if isinstance(partial, Result):
-            _annotate(partial, model, warn)
+            _annotate(partial, model, warn, note)
         raise
 
 
@@ -310,15 +331,18 @@ class Stepper:
         """Continue to t_end and return the saved history of this stretch (options as in ``solve``)."""
         t_end = _checks.number("t_end", t_end)  # checked by the C++ loop
         opts, progress, throw, warn = _run_options(self.model, options)
-        with _partial_annotated(self.model, warn):
-            res = _annotate(self._st.integrate(t_end, opts, progress), self.model, warn)
+        if not hasattr(self, "_note"):
+            self._note = _step_note(self.model, self.scheme, self.dt)
+        with _partial_annotated(self.model, warn, self._note):
+            res = _annotate(self._st.integrate(t_end, opts, progress), self.model, warn, self._note)
         if throw and not res.success and res.status != Status.collapsed:
-            raise error_for(res.failure, res)
+            raise _failure_error(res, self._note)
         return res
 
 
 def default_max_displacement(u, v, duration: float) -> float:
-    """The default divergence bound on |u_i|: 1e10 x max(1, max|u|, max|v| x duration).
+    """The default divergence bound on |u_i|: 1e10 x max(1, max|u|, max|v| x duration), for a model
+    without declared loads (solve() adds their static displacement to the scale: see there).
 
     Far beyond any physical response of the model started from (u, v), yet
     reached long before a diverging state overflows, so such a run stops with
@@ -337,10 +361,17 @@ def solve(model: Model, scheme, *, dt: float, t_end: float, t0: float = 0.0, u0=
 
     Saves steps 0, save_every, 2 save_every, ... and always the last one. A
     run whose state becomes non-finite or whose |u_i| exceeds
-    ``max_displacement`` (default: ``default_max_displacement``, 1e10 times
-    the scale of the initial state; ``math.inf`` for none) stops within one
-    step with status ``Status.diverged``. An implicit step whose equilibrium
-    iteration does not converge stops the run with ``Status.newton_failed``
+    ``max_displacement`` (default: 1e10 times the run's displacement scale,
+    the largest of 1, max|u0|, max|v0| (t_end - t0) and the static
+    displacement of the declared loads over the run, so that a model in mm
+    or um, or loaded hard in its own units, is not called diverged where
+    the same model in m is not; ``math.inf`` for none) stops within one
+    step with status ``Status.diverged``. An explicit scheme whose dt is
+    above its stability limit on the model's linear part (damping included:
+    a heavily damped top mode shrinks it) is run, but ``Result.warnings``
+    and the DivergenceError say so (``nvib.stability.step_warning``). An
+    implicit step whose equilibrium iteration does not converge stops the
+    run with ``Status.newton_failed``
     (the residual history in the failure); the ``incremental`` and
     ``one_iteration`` modes never iterate and report what they leave
     unbalanced in ``Result.max_residual``. If (t_end - t0)/dt is not an
@@ -384,8 +415,10 @@ def _solve(model: Model, scheme, peaks, *, dt, t_end, t0=0.0, u0=None, v0=None, 
     opts, progress, throw, warn = _run_options(model, options)
     if peaks is not None:
         opts["peaks"] = peaks
-    with _partial_annotated(model, warn):
-        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, opts, progress), model, warn)
+    _core.run_steps(t0, t_end, dt)  # the core's checks of the run's times, before the stability note uses dt
+    note = _step_note(model, scheme, dt)
+    with _partial_annotated(model, warn, note):
+        res = _annotate(_core.solve(model._core, scheme, dt, t_end, t0, u0, v0, opts, progress), model, warn, note)
     if throw and not res.success and res.status != Status.collapsed:
-        raise error_for(res.failure, res)
+        raise _failure_error(res, note)
     return res

@@ -49,25 +49,37 @@ struct PyModel {
   }
 };
 
-inline nvib::Mass make_mass(const MassArray& m) {
-  if (m.ndim() == 1) return nvib::Mass::diagonal(Eigen::Map<const Vector>(m.data(), m.shape(0)));
+inline nvib::Mass make_mass(const MassArray& m, const nvib::Mass::DofName& name = {}) {
+  if (m.ndim() == 1) return nvib::Mass::diagonal(Eigen::Map<const Vector>(m.data(), m.shape(0)), name);
   if (m.ndim() == 2) {
     Matrix M = Eigen::Map<const nvib::History>(m.data(), m.shape(0), m.shape(1));
     if (M.rows() == M.cols()) {
       Matrix off = M;
       off.diagonal().setZero();
-      if (off.allFinite() && off.cwiseAbs().maxCoeff() == 0.0) return nvib::Mass::diagonal(M.diagonal());
+      if (off.allFinite() && off.cwiseAbs().maxCoeff() == 0.0) return nvib::Mass::diagonal(M.diagonal(), name);
     }
-    return nvib::Mass::dense(M);
+    return nvib::Mass::dense(M, name);
   }
   raise_value_error("mass", "expected a 1-D array (diagonal) or a 2-D matrix");
 }
 
 // A scipy.sparse mass: sparse (or lumped, if only its diagonal is stored).
-inline nvib::Mass make_mass(const py::object& mass) {
+inline nvib::Mass make_mass(const py::object& mass, const nvib::Mass::DofName& name = {}) {
   if (py::module_::import("scipy.sparse").attr("issparse")(mass).cast<bool>())
-    return nvib::Mass::sparse(mass.cast<nvib::SparseMatrix>());
-  return make_mass(mass.cast<MassArray>());
+    return nvib::Mass::sparse(mass.cast<nvib::SparseMatrix>(), name);
+  return make_mass(mass.cast<MassArray>(), name);
+}
+
+// "DOF i (its name)" for the mass's messages; the index alone where the name cannot be had.
+inline nvib::Mass::DofName dof_namer(const py::object& dofs) {
+  return [dofs](Index i) {
+    std::string out = "DOF " + std::to_string(i);
+    try {
+      out += " (" + py::str(dofs[py::int_(i)]).cast<std::string>() + ")";
+    } catch (const py::error_already_set&) {
+    }
+    return out;
+  };
 }
 
 inline fx::LawId parse_law(const std::string& s) { return fx::law_of(s); }
@@ -135,7 +147,7 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
                           const nvib::SparseMatrix& C,
                           py::object dofs, py::object force, py::object tangent, bool uses_velocity,
                           bool uses_time, std::vector<LawSpec> laws, std::vector<fx::EffectArray> arrays) {
-  nvib::Mass ms = make_mass(mass);
+  nvib::Mass ms = make_mass(mass, dof_namer(dofs));
   if (static_cast<Index>(py::len(dofs)) != ms.size())
     raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(py::len(dofs)));
   for (const fx::EffectArray& a : arrays)
@@ -356,6 +368,8 @@ inline void bind_models(py::module_& m) {
       .def_property_readonly("num_evaluated_effects", [](const PyModel& p) { return p.effects().num_evaluated(); })
       .def_property_readonly("effects", [](const PyModel& p) { return p.effects().effects(); })
       .def_property_readonly("effect_arrays", [](const PyModel& p) { return p.effects().arrays(); })
+      .def_property_readonly("warnings", [](const PyModel& p) { return p.visit([](auto& md) { return md.warnings(); }); },
+                             "what the accepted model still wants said (a nearly singular mass, a nearly symmetric K)")
       .def_property_readonly("mass_kind", [](const PyModel& p) {
         return p.visit([](auto& md) {
           const auto k = md.mass().kind();

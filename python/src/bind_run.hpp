@@ -200,6 +200,7 @@ inline void bind_run(py::module_& m) {
   m.attr("PIM_MAX_DOFS") = nvib::kPimMaxDofs;
   m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
         "the number of steps of a run (t_end - t0)/dt, rounded up unless an integer to round-off");
+  m.def("check_time_step", &nvib::check_time_step, py::arg("dt"), "the one check of a time step (ArgumentError naming dt)");
   m.def("run_steps", &nvib::run_steps, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
         "steps_to_reach for a whole run (solve): a step longer than the run is refused naming dt");
   m.def(
@@ -285,7 +286,9 @@ inline void bind_run(py::module_& m) {
 
   m.def("expm", &nvib::expm, py::arg("A"), py::arg("squarings") = 20,
         "Matrix exponential by the 2^N algorithm of the precise integration method.");
-  m.def("default_max_displacement", &nvib::default_max_displacement, py::arg("u"), py::arg("v"), py::arg("duration"));
+  m.def("default_max_displacement",
+        [](const Vector& u, const Vector& v, double duration) { return nvib::default_max_displacement(u, v, duration); },
+        py::arg("u"), py::arg("v"), py::arg("duration"));
 }
 
 }  // namespace nvib_py

@@ -214,6 +214,58 @@ int main() {
     }
     CHECK(named);
   }
+  // A mass that fails its factorisation names the DOF and whether its pivot is zero or negative; a
+  // nearly singular one is accepted with a warning naming the DOF.
+  {
+    auto message = [](auto&& make) {
+      try {
+        make();
+      } catch (const nvib::ArgumentError& e) {
+        return e.argument() + "|" + e.what();
+      }
+      return std::string();
+    };
+    Matrix singular{{1.0, 1.0, 0.0}, {1.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
+    const std::string s1 = message([&] { nvib::Mass::dense(singular); });
+    CHECK(s1.find("mass|") == 0 && s1.find("singular: the pivot of DOF 1 after eliminating") != std::string::npos);
+    const std::string s2 = message([&] { nvib::Mass::sparse(singular.sparseView()); });
+    CHECK(s2.find("the sparse mass matrix is not positive definite: it is singular: the pivot of DOF 1") != std::string::npos);
+    Matrix indefinite{{1.0, 2.0}, {2.0, 1.0}};
+    const std::string s3 = message([&] { nvib::Mass::dense(indefinite, [](Index i) { return "node " + std::to_string(i); }); });
+    CHECK(s3.find("indefinite: the pivot of node 1 after eliminating the DOFs before it is -3 < 0") != std::string::npos);
+    Matrix nearly{{1.0, 1.0}, {1.0, 1.0 + 1e-14}};
+    CHECK(nvib::Mass::dense(nearly).warning().find("the mass matrix is nearly singular: the Cholesky pivot of DOF 1") == 0);
+    CHECK(nvib::Mass::dense(Matrix::Identity(2, 2)).warning().empty());
+    const auto model = nvib::make_linear_model(nvib::Mass::dense(nearly), Matrix::Identity(2, 2));
+    CHECK(model.warnings().size() == 1 && model.warnings()[0].find("mass: the mass matrix is nearly singular") == 0);
+  }
+  // One triangle of a symmetric K with its diagonal is refused naming K; a one-sided coupling without a
+  // diagonal, with grounded springs added by the effects, is not.
+  {
+    Matrix full{{2.0, -1.0}, {-1.0, 2.0}};
+    bool named = false;
+    try {
+      nvib::make_linear_model(nvib::Mass::diagonal(Vector::Ones(2)), Matrix(full.triangularView<Eigen::Upper>()));
+    } catch (const nvib::ArgumentError& e) {
+      named = e.argument() == "K" && std::string(e.what()).find("one triangle") != std::string::npos;
+    }
+    CHECK(named);
+    Matrix coupling{{0.0, 1.0}, {0.0, 0.0}};
+    std::vector<fx::Effect> springs{fx::spring({{0, 1.0}}, 10.0), fx::spring({{1, 1.0}}, 10.0)};
+    const auto follower = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(2)), springs, coupling);
+    CHECK(follower.K().coeff(0, 0) == 10.0 && follower.K().coeff(0, 1) == 1.0);
+  }
+  // The default divergence bound follows the static displacement of the loads: 2e11 here (a model in
+  // nm loaded to 200 m), so a stable run of it is not called diverged.
+  {
+    std::vector<fx::Effect> load{fx::constant_force({{0, 1.0}}, 200.0)};
+    const auto nm = fx::make_effect_model(nvib::Mass::diagonal(Vector::Constant(1, 1e-9)), load,
+                                          Matrix(Matrix::Constant(1, 1, 1e-9)), Matrix(Matrix::Constant(1, 1, 2e-10)));
+    const double scale = nvib::load_displacement_scale(nm, 0.0, 20.0);
+    CHECK(std::abs(scale - 200.0 / (1e-9 + 1e-9 / 400.0)) <= 1e-9 * scale);
+    const auto res = nvib::solve(nm, nvib::CentralDifference(), 0.05, 20.0, Vector::Zero(1), Vector::Zero(1));
+    CHECK(res.status == nvib::Status::success && res.u.cwiseAbs().maxCoeff() > 1e10);
+  }
   // Static equilibrium of the chain under a constant load on its last DOF: sparse and dense agree.
   {
     auto list = chain(n);

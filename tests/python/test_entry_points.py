@@ -28,7 +28,7 @@ from nvib.analysis import exact, stability
 SKIP = {"ArgumentError", "ArgumentTypeError", "ConvergenceError", "DivergenceError", "NvibError", "RecordError",
         "SceneError", "SingularMatrixError", "Batch", "Energy", "Estimate", "Failure", "IDA", "LawResponse",
         "Reference", "Result", "RunError", "RunSummary", "Spectrum", "Stats", "Status", "cmake_dir", "include_dir",
-        "scene_names", "schemes", "stability.NvibError", "stability.Model", "stability.Stepper"}
+        "scene_names", "schemes", "stability.NvibError", "stability.Model", "stability.Stepper", "stability.StepLimit"}
 
 # Parameters that take a float without saying so in their signature.
 FLOATS = {"rayleigh": ["zeta"], "rayleigh_coefficients": ["zeta"], "solve_many": ["t0", "max_displacement",
@@ -130,6 +130,8 @@ def calls(files) -> dict:
         "exact.pendulum_period": (exact.pendulum_period, (), {"theta0": 0.5}),
         "stability.amplification_matrix": (stability.amplification_matrix, (nvib.Newmark(), 0.1), {}),
         "stability.check_scheme": (stability.check_scheme, ("scheme", nvib.Newmark()), {}),
+        "stability.step_limit": (stability.step_limit, (osc, nvib.CentralDifference()), {}),
+        "stability.step_warning": (stability.step_warning, (osc, nvib.CentralDifference(), 0.01), {}),
         "stability.critical_omega_h": (stability.critical_omega_h, (nvib.CEMDTS(),), {}),
         "stability.damping_ratio": (stability.damping_ratio, (nvib.Newmark(), 0.1), {}),
         "stability.period_error": (stability.period_error, (nvib.Newmark(), 0.1), {}),

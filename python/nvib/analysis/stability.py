@@ -49,10 +49,11 @@ Chung J., Hulbert G.M., J. Appl. Mech. 60 (1993) 371-375.
 from __future__ import annotations
 
 import math
+import dataclasses
 
 import numpy as np
 
-from .. import _checks, _labels
+from .. import _checks, _core, _labels
 from .._errors import NvibError
 from .._model import Model
 from .._schemes import check_scheme
@@ -70,10 +71,19 @@ _MIN_RATIO = 1e-9    # below this step (relative) an ambiguous match is accepted
 
 # ---------------------------------------------------------------- input checks
 
-def _check_xi(xi) -> float:
+XI_MAX = 1e8        # largest damping ratio the amplification matrix is built for (C = 2ξ on ω = 1)
+
+
+def _check_xi(xi, *, overdamped: bool = False) -> float:
+    """ξ in [0, 1): the principal roots (period, damping) need an oscillating pair; with ``overdamped``
+    ξ ≥ 1 too (up to XI_MAX): the amplification matrix, its spectral radius and Ω_crit need no such pair."""
     xi = _checks.real("xi", xi)
-    if not 0.0 <= xi < 1.0:
-        raise _checks.value_error("xi", f"the damping ratio needs 0 <= xi < 1, got {xi}")
+    if overdamped:
+        if not 0.0 <= xi <= XI_MAX:
+            raise _checks.value_error("xi", f"the damping ratio needs 0 <= xi <= {XI_MAX:g}, got {xi}")
+    elif not 0.0 <= xi < 1.0:
+        raise _checks.value_error("xi", f"the damping ratio needs 0 <= xi < 1 (an oscillating principal pair), "
+                                        f"got {xi}")
     return xi
 
 
@@ -148,7 +158,7 @@ def amplification_matrix(scheme, omega_h: float, xi: float = 0.0) -> np.ndarray:
     check_scheme("scheme", scheme)
     om = _checks.real("omega_h", omega_h, positive=True)
     _omegas(om)
-    return _matrix(scheme, om, _oscillator(_check_xi(xi)))
+    return _matrix(scheme, om, _oscillator(_check_xi(xi, overdamped=True)))
 
 
 def _eigenvalues(scheme, om: float, model: Model) -> np.ndarray:
@@ -164,9 +174,10 @@ def spectral_radius(scheme, omega_h, xi: float = 0.0):
     inf where one step from a unit state is not finite (PreciseIntegration with 20
     squarings from Ω ≈ 3e6: its exponential overflows).
 
-    ``omega_h`` may be an array (values in OMEGA_RANGE): the result then has its shape."""
+    ``omega_h`` may be an array (values in OMEGA_RANGE): the result then has its shape; ``xi`` may be 1
+    or more (an overdamped oscillator)."""
     check_scheme("scheme", scheme)
-    xi = _check_xi(xi)
+    xi = _check_xi(xi, overdamped=True)
     oms, shape = _omegas(omega_h)
     model = _oscillator(xi)
     rho = np.array([np.max(np.abs(_eigenvalues(scheme, om, model))) for om in oms])
@@ -291,9 +302,13 @@ def critical_omega_h(scheme, xi: float = 0.0, *, omega_max: float = OMEGA_LIMIT,
     above these, and a growth of 1e-6 per step needs 7e5 steps to double an amplitude.
     Where ρ leaves 1 like √(Ω - Ω_crit) (a pair splitting on the real axis) the offset
     this causes in Ω_crit is ~1e-12; where it leaves 1 linearly it is ~tol.
+
+    ``xi`` may be 1 or more: damping shrinks an explicit scheme's limit (central difference, whose
+    damping force takes the predicted velocity v_n + Δt a_n, and Zhai(1/2, 1/2):
+    Ω_crit = 2(√(1+4ξ²) - 2ξ), about 1/(2ξ) for large ξ), so a heavily damped top mode sets it.
     """
     check_scheme("scheme", scheme)
-    xi = _check_xi(xi)
+    xi = _check_xi(xi, overdamped=True)
     omega_max = _checks.real("omega_max", omega_max, positive=True)
     omega_min = _checks.real("omega_min", omega_min, positive=True)
     if omega_max > OMEGA_RANGE[1]:
@@ -325,6 +340,155 @@ def critical_omega_h(scheme, xi: float = 0.0, *, omega_max: float = OMEGA_LIMIT,
         else:
             lo = mid
     return 0.5 * (lo + hi)
+
+
+# ---------------------------------------------------------------- the step limit of a model
+
+_DENSE_MODES = 300   # up to this many DOFs every mode is found (dense eigh), above it the top one (eigsh)
+
+
+@dataclasses.dataclass(frozen=True)
+class StepLimit:
+    """The stability limit of an explicit scheme on a model's linear part (K and C, the linear springs
+    and dampers included), at the mode that sets it: ``dt`` with that mode's damping ratio ``zeta``,
+    ``dt_undamped`` the limit without damping, ``omega`` the mode's circular frequency [rad/s]."""
+
+    dt: float
+    dt_undamped: float
+    omega: float
+    zeta: float
+
+
+def _modes(model: Model):
+    """(ω, ζ) of the undamped modes of the model's linear part, symmetric parts of K and C (every mode
+    up to _DENSE_MODES DOFs, else the highest one only); ζ_i = φ_iᵀ C φ_i / (2 ω_i) for the
+    mass-normalised φ_i (modal damping; the coupling a non-proportional C adds is left out)."""
+    from scipy import linalg, sparse
+    from scipy.sparse import linalg as splinalg
+
+    K, C, M = model.K, model.C, model.mass_sparse
+    if K.nnz == 0:
+        return np.empty(0), np.empty(0)
+    K = 0.5 * (K + K.T)
+    C = 0.5 * (C + C.T)
+    if model.n <= _DENSE_MODES:
+        w2, V = linalg.eigh(K.toarray(), M.toarray())
+    else:
+        d = M.diagonal()
+        try:
+            if M.nnz == model.n and np.all(d > 0):  # lumped: the symmetric form D^-1/2 K D^-1/2
+                s = sparse.diags(1.0 / np.sqrt(d))
+                w2, V = splinalg.eigsh(s @ K @ s, k=1, which="LA", tol=1e-6, maxiter=50 * model.n)
+                V = s @ V
+            else:
+                w2, V = splinalg.eigsh(K, k=1, M=M, which="LA", tol=1e-6, maxiter=50 * model.n)
+        except splinalg.ArpackNoConvergence as exc:  # the best Ritz pair found (the limit from below)
+            if len(exc.eigenvalues) == 0:
+                return np.empty(0), np.empty(0)
+            w2, V = exc.eigenvalues, exc.eigenvectors
+        V = V / np.sqrt(np.einsum("ij,ij->j", V, M @ V))
+    keep = w2 > 0.0
+    w = np.sqrt(w2[keep])
+    V = V[:, keep]
+    zeta = np.einsum("ij,ij->j", V, C @ V) / (2.0 * w)
+    return w, np.clip(zeta, 0.0, None)
+
+
+def _model_modes(model: Model):
+    """_modes(model), kept on the model (its K, C and mass never change)."""
+    cached = getattr(model, "_linear_modes", None)
+    if cached is None:
+        cached = _modes(model)
+        try:
+            model._linear_modes = cached
+        except AttributeError:
+            pass
+    return cached
+
+
+def _cd_limits(w: np.ndarray, zeta: np.ndarray) -> np.ndarray:
+    """Central difference's step limit of each mode, 2(√(1+4ζ²) - 2ζ)/ω, written without cancellation."""
+    return 2.0 / (w * (np.hypot(1.0, 2.0 * zeta) + 2.0 * zeta))  # hypot: no overflow for a huge zeta
+
+
+def _unstable(scheme, om: float, xi: float) -> bool:
+    """ρ > 1 + RHO_TOL for Ω = om and damping ratio xi (beyond OMEGA_RANGE: above it unstable, below stable)."""
+    if om > OMEGA_RANGE[1]:
+        return True
+    if om < OMEGA_RANGE[0]:
+        return False
+    return float(np.max(np.abs(_eigenvalues(scheme, om, _oscillator(min(xi, XI_MAX)))))) > 1.0 + RHO_TOL
+
+
+def _explicit(scheme) -> bool:
+    return bool(scheme.is_explicit) and scheme.key != "pim"
+
+
+def _limit_at(scheme, om_unstable: float, xi: float) -> float:
+    """Ω_crit for xi, knowing Ω = om_unstable is unstable (so the scan ends there)."""
+    hi = min(max(om_unstable, OMEGA_START * 1.01), OMEGA_RANGE[1])
+    lo = OMEGA_START if hi > OMEGA_START * 1.001 else OMEGA_RANGE[0]
+    return critical_omega_h(scheme, min(xi, XI_MAX), omega_max=hi, omega_min=lo)
+
+
+def step_limit(model: Model, scheme) -> StepLimit | None:
+    """The largest stable step of an explicit ``scheme`` on ``model``'s linear part, or None where there is
+    none to find (an implicit scheme, PreciseIntegration, which integrates the linear part exactly, or a
+    model without a linear stiffness).
+
+    Every mode's limit is estimated by central difference's Ω_crit = 2(√(1+4ζ²) - 2ζ) for its damping
+    ratio ζ; the mode with the smallest is then measured with ``scheme``'s own amplification matrix
+    (``critical_omega_h``). Damping shrinks the limit of an explicit scheme, since the damping force is
+    explicit too: Rayleigh damping C = αM + βK gives the top modes ζ ≈ βω/2, and a ζ of 100 divides
+    central difference's step limit by about 400. Nonlinear effects are left out (their tangent changes along the run)."""
+    check_scheme("scheme", scheme)
+    if not isinstance(model, Model):
+        raise _checks.type_error("model", f"expected nvib.Model, got {type(model).__name__}")
+    if not _explicit(scheme):
+        return None
+    w, zeta = _model_modes(model)
+    if w.size == 0:
+        return None
+    k = int(np.argmin(_cd_limits(w, zeta)))
+    om, z, top = float(w[k]), float(zeta[k]), float(w.max())
+    damped = _limit_at(scheme, OMEGA_RANGE[1], z) if z > 0.0 else critical_omega_h(scheme, 0.0)
+    return StepLimit(dt=damped / om, dt_undamped=critical_omega_h(scheme, 0.0) / top, omega=om, zeta=z)
+
+
+def step_warning(model: Model, scheme, dt: float) -> str | None:
+    """What ``solve(model, scheme, dt=dt)`` has to be told before it runs: a dt above the explicit
+    scheme's stability limit on the model's linear part, naming the mode, its damping ratio and the
+    limit; else None. Cheap when dt is stable: the modes (kept on the model) and one amplification
+    matrix at each of the two modes that may set the limit (the highest, and the one with the smallest
+    central-difference limit for its damping)."""
+    dt = _checks.number("dt", dt)
+    _core.check_time_step(dt)
+    if not _explicit(scheme):
+        return None
+    w, zeta = _model_modes(model)
+    if w.size == 0:
+        return None
+    for k in dict.fromkeys((int(np.argmin(_cd_limits(w, zeta))), int(np.argmax(w)))):
+        om, z = float(w[k]), float(zeta[k])
+        if _unstable(scheme, om * dt, z):
+            break
+    else:
+        return None
+    top = float(w.max())
+    limit = _limit_at(scheme, om * dt, z) / om
+    undamped = critical_omega_h(scheme, 0.0) / top
+    text = (f"dt = {dt:.4g} s is above the stability limit of {scheme_label(scheme)} on this model, "
+            f"dt <= {limit:.4g} s, set by its mode of omega = {om:.4g} rad/s")
+    if z > 0.0 and limit < (1.0 - 1e-6) * undamped:
+        text += (f" with the damping ratio zeta = {z:.4g} (from C): damping shrinks an explicit scheme's limit, "
+                 f"its damping force being explicit too ({undamped / limit:.3g}x below the undamped limit "
+                 f"{undamped:.4g} s; central difference, whose damping force takes the predicted velocity "
+                 f"v + dt a: omega dt <= 2 (sqrt(1 + 4 zeta^2) - 2 zeta), about 1/(2 zeta) for a large zeta); "
+                 f"reduce dt, or the damping of the top modes (Rayleigh's beta gives them "
+                 f"zeta = beta omega / 2), or use an implicit scheme")
+    else:
+        text += f" (zeta = {z:.3g}); reduce dt or use an implicit scheme"
+    return text + ": the run will diverge"
 
 
 # ---------------------------------------------------------------- labels and plot

@@ -55,7 +55,8 @@ def add_parser(sub) -> None:
                    help="leave out effects by name or type (repeatable)")
     g.add_argument("--max-displacement", type=c.bound, metavar="U",
                    help="stop as diverged once some |u_i| exceeds U (default: 1e10 x max(1, max|u0|, "
-                        "max|v0| x duration); 'inf': only non-finite states)")
+                        "max|v0| x duration, the static displacement of the loads); 'inf': only non-finite "
+                        "states)")
     g.add_argument("--dof", metavar="NAME", help="DOF to report and plot (default: the scene's plot_dof)")
     g.add_argument("--measure", metavar="EFFECT",
                    help="plot the measure d = g . u of the effect of this name (a storey drift: --measure storey2) "

@@ -169,6 +169,7 @@ Assembled assemble(const Mass& mass, std::vector<Effect> list, const MatK& K_ext
                "expected shape (" + std::to_string(n) + ", " + std::to_string(n) + "), got (" +
                    std::to_string(A.rows()) + ", " + std::to_string(A.cols()) + ")");
     const SparseMatrix S = to_sparse(A);
+    refuse_one_triangle(S, name);  // the matrix given, before the springs and dampers join it
     for (Index j = 0; j < S.outerSize(); ++j)
       for (SparseMatrix::InnerIterator it(S, j); it; ++it) out.emplace_back(it.row(), static_cast<int>(j), it.value());
   };
@@ -184,7 +185,8 @@ template <class MatK = Matrix, class MatC = Matrix,
 Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, const MatK& K_extra = MatK(),
                                    const MatC& C_extra = MatC()) {
   auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra);
-  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set));
+  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set),
+                          LinearPartsSummed{true});
 }
 
 template <class Extra, class MatK = Matrix, class MatC = Matrix,
@@ -195,7 +197,7 @@ Model<EffectsPlus<Extra>> make_effect_model(Mass mass, std::vector<Effect> list,
   const Index n = mass.size();
   auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra);
   return Model<EffectsPlus<Extra>>(std::move(mass), std::move(a.K), std::move(a.C),
-                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n));
+                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n), LinearPartsSummed{true});
 }
 
 }  // namespace effects
@@ -208,7 +210,8 @@ template <class MatK = Matrix, class MatC = Matrix>
 Model<EffectSet> make_effect_model(Mass mass, std::vector<Effect> list, std::vector<EffectArray> arrays,
                                    const MatK& K_extra = MatK(), const MatC& C_extra = MatC()) {
   auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra, std::move(arrays));
-  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set));
+  return Model<EffectSet>(std::move(mass), std::move(a.K), std::move(a.C), std::move(a.set),
+                          LinearPartsSummed{true});
 }
 template <class Extra, class MatK = Matrix, class MatC = Matrix>
 Model<EffectsPlus<Extra>> make_effect_model_plus(Mass mass, std::vector<Effect> list, std::vector<EffectArray> arrays,
@@ -216,7 +219,7 @@ Model<EffectsPlus<Extra>> make_effect_model_plus(Mass mass, std::vector<Effect> 
   const Index n = mass.size();
   auto a = detail_::assemble(mass, std::move(list), K_extra, C_extra, std::move(arrays));
   return Model<EffectsPlus<Extra>>(std::move(mass), std::move(a.K), std::move(a.C),
-                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n));
+                                   EffectsPlus<Extra>(std::move(a.set), std::move(extra), n), LinearPartsSummed{true});
 }
 }  // namespace effects
 }  // namespace nvib

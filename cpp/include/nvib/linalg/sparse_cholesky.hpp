@@ -84,6 +84,22 @@ class OrderedCholesky
     for (Index i = 0; i < n; ++i) x[i] = work[perm_[static_cast<size_t>(i)]];
   }
 
+  // The pivot of each row of A (not of P A P^T): D of LDL^T, or the squared diagonal of L of LL^T.
+  Vector dof_pivots() const {
+    const Index n = static_cast<Index>(perm_.size());
+    Vector out(n);
+    for (Index i = 0; i < n; ++i) {
+      const int k = perm_[static_cast<size_t>(i)];
+      if constexpr (LDLT) {
+        out[i] = this->m_diag[k];
+      } else {
+        const double l = this->m_matrix.coeff(k, k);
+        out[i] = l * l;
+      }
+    }
+    return out;
+  }
+
   // D of LDL^T, by reference (Eigen's vectorD() returns a copy).
   const Vector& pivots() const { return this->m_diag; }
 

@@ -4,8 +4,10 @@
 // only: above kDenseMax DOFs it is refused, naming what to use instead).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include <Eigen/SparseCholesky>
 
@@ -21,27 +23,33 @@ class Mass {
   // A dense n x n mass and its factorisation take 16 n^2 bytes: 64 MB at this size.
   static constexpr Index kDenseMax = 2000;
 
+  // A pivot below this fraction of the largest diagonal entry makes the mass nearly singular (warning()).
+  static constexpr double kNearSingular = 1e-12;
+  // How a DOF is named in messages: "DOF 3" by default; a model with DOF names adds the name.
+  using DofName = std::function<std::string(Index)>;
+
   Mass() = default;
 
-  static Mass diagonal(const Vector& m) {
+  static Mass diagonal(const Vector& m, const DofName& name = {}) {
     NVIB_CHECK(m.size() > 0, "mass", "at least one degree of freedom is needed");
     for (Index i = 0; i < m.size(); ++i) {
-      NVIB_CHECK(std::isfinite(m[i]), "mass", "entry " + std::to_string(i) + " is not finite");
+      NVIB_CHECK(std::isfinite(m[i]), "mass", "entry " + std::to_string(i) + " is not finite" + named(name, i));
       NVIB_CHECK(m[i] > 0.0, "mass", "entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
-                                      ", every mass must be > 0");
+                                      ", every mass must be > 0" + named(name, i));
       NVIB_CHECK(std::isfinite(1.0 / m[i]), "mass", "entry " + std::to_string(i) + " is " + detail::fmt(m[i]) +
-                                                     ", too small for its inverse to be finite");
+                                                     ", too small for its inverse to be finite" + named(name, i));
     }
     auto data = std::make_shared<Data>();
     data->kind = Kind::diagonal;
     data->d = m;
     data->dinv = m.cwiseInverse();
     data->ndinv = -data->dinv;
+    data->warning = near_singular(m, m, name, "mass");
     return Mass(std::move(data));
   }
 
   // A sparse symmetric positive definite mass; one with only diagonal entries is lumped.
-  static Mass sparse(SparseMatrix M) {
+  static Mass sparse(SparseMatrix M, const DofName& name = {}) {
     const Index n = M.rows();
     NVIB_CHECK(n > 0 && n == M.cols(), "mass",
                "a sparse mass must be square, got " + std::to_string(n) + "x" + std::to_string(M.cols()));
@@ -55,7 +63,7 @@ class Mass {
       }
     if (diagonal_only) {
       Vector d = M.diagonal();
-      return diagonal(d);
+      return diagonal(d, name);
     }
     check_symmetric(SparseMatrix(M - SparseMatrix(M.transpose())), max_abs(M));
     auto data = std::make_shared<Data>();
@@ -65,14 +73,15 @@ class Mass {
     llt->analyze(M);
     llt->factorize_values(M);
     data->sllt = llt;
-    NVIB_CHECK(data->sllt->info() == Eigen::Success, "mass", "the sparse mass matrix is not positive definite");
+    if (data->sllt->info() != Eigen::Success) refuse_not_positive_definite(M, name, "sparse");
+    data->warning = near_singular(llt->dof_pivots(), data->d, name, "pivot");
     data->S = std::move(M);
     Mass out(std::move(data));
     out.work_.setZero(n);
     return out;
   }
 
-  static Mass dense(const Matrix& M) {
+  static Mass dense(const Matrix& M, const DofName& name = {}) {
     NVIB_CHECK(M.rows() > 0 && M.rows() == M.cols(), "mass",
                "a dense mass must be square, got " + std::to_string(M.rows()) + "x" + std::to_string(M.cols()));
     NVIB_CHECK(M.rows() <= kDenseMax, "mass",
@@ -86,12 +95,15 @@ class Mass {
     data->kind = Kind::dense;
     data->M = M;
     data->dllt = std::make_shared<Eigen::LLT<Matrix>>(M);
-    NVIB_CHECK(data->dllt->info() == Eigen::Success, "mass", "the dense mass matrix is not positive definite");
+    if (data->dllt->info() != Eigen::Success) refuse_not_positive_definite(SparseMatrix(M.sparseView(1.0, 0.0)), name, "dense");
     data->d = M.diagonal();
+    data->warning = near_singular(data->dllt->matrixLLT().diagonal().cwiseAbs2(), data->d, name, "pivot");
     return Mass(std::move(data));
   }
 
   Kind kind() const { return data_->kind; }
+  // Empty, or what a mass that was accepted still wants said (nearly singular: which DOF).
+  const std::string& warning() const { return data_->warning; }
   bool is_diagonal() const { return data_->kind == Kind::diagonal; }
   Index size() const { return data_->d.size(); }
   const Vector& diagonal_entries() const { return data_->d; }
@@ -184,6 +196,71 @@ class Mass {
   }
 
  private:
+  static std::string label(const DofName& name, Index i) { return name ? name(i) : "DOF " + std::to_string(i); }
+  static std::string named(const DofName& name, Index i) { return name ? " (" + name(i) + ")" : std::string(); }
+
+  // pivots[i]: DOF i's pivot of the Cholesky factorisation (its mass for a lumped one); d: the diagonal.
+  // A pivot below kNearSingular x the largest diagonal entry: the mass is nearly singular there.
+  static std::string near_singular(const Vector& pivots, const Vector& d, const DofName& name, const char* what) {
+    if (pivots.size() == 0) return {};
+    Index k = 0;
+    const double smallest = pivots.minCoeff(&k), largest = d.cwiseAbs().maxCoeff();
+    if (!(smallest < kNearSingular * largest)) return {};
+    const bool lumped = std::string(what) == "mass";
+    return "the mass matrix is nearly singular: " + std::string(lumped ? "the mass" : "the Cholesky pivot") + " of " +
+           label(name, k) + " is " + detail::fmt(smallest) + ", " + detail::fmt(smallest / largest) +
+           " of the largest diagonal mass " + detail::fmt(largest) +
+           (lumped ? " (a DOF almost without mass)"
+                   : " (a DOF almost without mass of its own, or rows of the mass that nearly depend on others)") +
+           ": its accelerations are amplified by the inverse and the explicit schemes' step limit shrinks with "
+           "the square root of that mass; check the units and the assembly of the mass";
+  }
+
+  // The mass failed its Cholesky factorisation: find the first DOF (in order, no pivoting) whose
+  // pivot is not > 0 and say whether it is zero (a DOF without mass: singular) or negative (indefinite).
+  [[noreturn]] static void refuse_not_positive_definite(const SparseMatrix& M, const DofName& name, const char* kind) {
+    const std::string head = std::string("the ") + kind + " mass matrix is not positive definite: ";
+    const Index n = M.rows();
+    const Vector d = M.diagonal();
+    const double scale = std::max(d.cwiseAbs().maxCoeff(), max_abs(M));
+    for (Index i = 0; i < n; ++i) {
+      NVIB_CHECK(d[i] != 0.0, "mass", head + "it is singular: " + label(name, i) + " has no mass (its diagonal entry is 0)");
+      NVIB_CHECK(d[i] > 0.0, "mass", head + "it is indefinite: " + label(name, i) + " has the negative mass " +
+                                         detail::fmt(d[i]) + " on the diagonal");
+    }
+    Index k = -1;
+    double p = 0.0;
+    if (n <= kDenseMax) {
+      Matrix A(M);  // unpivoted Cholesky, right-looking, until the first pivot that is not > 0
+      for (Index j = 0; j < n; ++j) {
+        p = A(j, j);
+        if (!(p > 0.0)) {
+          k = j;
+          break;
+        }
+        const Index r = n - j - 1;
+        if (r == 0) break;
+        A.col(j).tail(r) /= std::sqrt(p);
+        A.bottomRightCorner(r, r).selfadjointView<Eigen::Lower>().rankUpdate(A.col(j).tail(r), -1.0);
+      }
+    } else {
+      Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower, Eigen::NaturalOrdering<int>> ldlt(M);
+      if (ldlt.info() == Eigen::Success) {
+        const Vector D = ldlt.vectorD();
+        for (Index j = 0; j < n && k < 0; ++j)
+          if (!(D[j] > 0.0)) k = j, p = D[j];
+      }
+    }
+    NVIB_CHECK(k >= 0, "mass", head + "a pivot of its Cholesky factorisation is not > 0 (round-off on a nearly singular matrix)");
+    const std::string where = "the pivot of " + label(name, k) + " after eliminating the DOFs before it is " + detail::fmt(p);
+    NVIB_CHECK(std::abs(p) > kNearSingular * scale, "mass",
+               head + "it is singular: " + where + " (0 up to round-off): " + label(name, k) +
+                   " has no mass of its own, its row depends on the rows before it");
+    throw ArgumentError("mass", head + "it is indefinite: " + where +
+                                    " < 0 (off-diagonal entries too large for the diagonal: a negative mass in some "
+                                    "direction)");
+  }
+
   template <class A>
   static void check_symmetric(const A& difference, double scale) {
     NVIB_CHECK(max_abs(difference) <= 1e-12 * scale, "mass", "the mass matrix is not symmetric");
@@ -203,6 +280,7 @@ class Mass {
     SparseMatrix S;
     std::shared_ptr<const Eigen::LLT<Matrix>> dllt;
     std::shared_ptr<const OrderedCholesky<false>> sllt;
+    std::string warning;
   };
   explicit Mass(std::shared_ptr<const Data> data) : data_(std::move(data)) {}
 

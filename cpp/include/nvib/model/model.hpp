@@ -16,6 +16,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -143,6 +144,33 @@ struct magnitude_evaluates_force<F, std::void_t<decltype(F::magnitude_evaluates_
     : std::bool_constant<F::magnitude_evaluates_force> {};
 }  // namespace traits
 
+// K and C handed to Model: given as they are (checked for being one triangle), or sums of parts
+// checked one by one (summed = true).
+struct LinearPartsSummed {
+  bool summed = false;
+};
+
+// One triangle of a symmetric matrix with its diagonal (as some programs store it) would be solved as a
+// very different matrix: refused, naming it. A non-symmetric K or C is legitimate (follower forces,
+// gyroscopic terms), and so is a strictly triangular one without a diagonal (a one-sided coupling); a
+// triangle with its diagonal is half of a symmetric matrix.
+inline void refuse_one_triangle(const SparseMatrix& A, const char* name) {
+  Index above = 0, below = 0, diagonal = 0;
+  for (Index j = 0; j < A.outerSize(); ++j)
+    for (SparseMatrix::InnerIterator it(A, j); it; ++it)
+      if (it.value() != 0.0) {
+        above += it.row() < it.col();
+        below += it.row() > it.col();
+        diagonal += it.row() == it.col();
+      }
+  if (diagonal == 0) return;
+  const std::string held = " and on its diagonal only (one triangle of a symmetric matrix, as some programs store "
+                           "it): it would be solved as that triangle; give the whole matrix (for a symmetric one, "
+                           "the triangle plus its transpose minus the diagonal)";
+  NVIB_CHECK(above == 0 || below > 0, name, "the matrix has entries above its diagonal" + held);
+  NVIB_CHECK(below == 0 || above > 0, name, "the matrix has entries below its diagonal" + held);
+}
+
 template <class Force = NoForce>
 class Model {
  public:
@@ -150,14 +178,17 @@ class Model {
 
   Model() = default;
 
-  // K and C may be empty (0x0) when absent; they are kept sparse (compressed columns).
-  Model(Mass mass, SparseMatrix K, SparseMatrix C, Force force = Force{})
+  // K and C may be empty (0x0) when absent; they are kept sparse (compressed columns). With
+  // LinearParts{true} they are sums of parts each checked on its own (the K given plus the springs of
+  // the effects): a one-sided K given plus grounded springs is not one triangle of a symmetric matrix.
+  Model(Mass mass, SparseMatrix K, SparseMatrix C, Force force = Force{}, LinearPartsSummed parts = {})
       : mass_(std::move(mass)), f_(std::move(force)) {
     const Index n = mass_.size();
     NVIB_CHECK(n > 0, "mass", "the model has no degree of freedom");
     auto lin = std::make_shared<Linear>();
-    has_K_ = check_linear_part(K, "K", n);
-    has_C_ = check_linear_part(C, "C", n);
+    if (!mass_.warning().empty()) lin->warnings.push_back("mass: " + mass_.warning());
+    has_K_ = check_linear_part(K, "K", n, lin->warnings, !parts.summed);
+    has_C_ = check_linear_part(C, "C", n, lin->warnings, !parts.summed);
     lin->K = std::move(K);
     lin->C = std::move(C);
     lin->product = LinearProduct(has_K_ ? lin->K : SparseMatrix(n, n), has_C_ ? lin->C : SparseMatrix(n, n));
@@ -178,6 +209,9 @@ class Model {
   bool has_C() const { return has_C_; }
   const SparseMatrix& K() const { return lin_->K; }
   const SparseMatrix& C() const { return lin_->C; }
+  // What an accepted model still wants said ("mass: nearly singular ...", "K: nearly symmetric ..."), each
+  // prefixed by the argument it is about.
+  const std::vector<std::string>& warnings() const { return lin_->warnings; }
   Force& nonlinear_force() { return f_; }
   const Force& nonlinear_force() const { return f_; }
 
@@ -390,7 +424,11 @@ class Model {
     }
   }
 
-  static bool check_linear_part(SparseMatrix& A, const char* name, Index n) {
+  // Relative asymmetry below which a non-symmetric K or C is taken for a symmetric one with round-off.
+  static constexpr double kNearlySymmetric = 1e-8;
+
+  static bool check_linear_part(SparseMatrix& A, const char* name, Index n, std::vector<std::string>& warnings,
+                                bool check_triangle) {
     if (A.rows() == 0 && A.cols() == 0) return false;
     NVIB_CHECK(A.rows() == n && A.cols() == n, name,
                "expected shape (" + std::to_string(n) + ", " + std::to_string(n) + "), got (" +
@@ -398,6 +436,32 @@ class Model {
     A.makeCompressed();
     for (Index k = 0; k < A.nonZeros(); ++k)
       NVIB_CHECK(std::isfinite(A.valuePtr()[k]), name, "the matrix has non-finite entries");
+    if (check_triangle) refuse_one_triangle(A, name);
+    Index above = 0, below = 0;
+    double largest = 0.0;
+    for (Index j = 0; j < A.outerSize(); ++j)
+      for (SparseMatrix::InnerIterator it(A, j); it; ++it)
+        if (it.value() != 0.0) {
+          above += it.row() < it.col();
+          below += it.row() > it.col();
+          largest = std::max(largest, std::abs(it.value()));
+        }
+    // Nearly symmetric but not quite: round-off in an assembly that meant a symmetric matrix.
+    if (above > 0 && below > 0) {
+      SparseMatrix D = A - SparseMatrix(A.transpose());
+      double asym = 0.0;
+      Index ai = 0, aj = 0;
+      for (Index j = 0; j < D.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(D, j); it; ++it)
+          if (std::abs(it.value()) > asym) asym = std::abs(it.value()), ai = it.row(), aj = j;
+      if (asym > 0.0 && asym <= kNearlySymmetric * largest)
+        warnings.push_back(std::string(name) + ": the matrix is symmetric only up to " + detail::fmt(asym / largest) +
+                           " of its largest entry (|" + name + "[" + std::to_string(ai) + ", " + std::to_string(aj) +
+                           "] - " + name + "[" + std::to_string(aj) + ", " + std::to_string(ai) +
+                           "]| = " + detail::fmt(asym) +
+                           "): probably round-off in its assembly; it is used as given (non-symmetric), "
+                           "symmetrise it, (A + A.T) / 2, if it is meant to be symmetric");
+    }
     return A.nonZeros() > 0;
   }
   static SparseMatrix to_sparse(const Matrix& A, const char* name) {
@@ -410,6 +474,7 @@ class Model {
   // The linear parts, never changed after construction: shared by the copies of the model.
   struct Linear {
     SparseMatrix K, C;
+    std::vector<std::string> warnings;  // see warnings()
     LinearProduct product;  // out += K u + C v, for the force
   };
   // out += |A| |x| (no stored |A|: it is only needed for round-off estimates)

@@ -108,14 +108,17 @@ constexpr std::int64_t kEnergyCheckFrom = 10;
 // Scale factor of the default divergence bound.
 constexpr double kBoundFactor = 1e10;
 
-// The default bound on |u_i|: 1e10 x max(1, max|u|, max|v| T) for a run of
-// duration T from (u, v). Far beyond any physical response of a model started
-// there, yet reached long before a diverging state overflows, so such a run
+// The default bound on |u_i|: 1e10 x max(1, max|u|, max|v| T, L) for a run of
+// duration T from (u, v), where L is the displacement the model's loads may cause
+// (load_displacement_scale() in solve.hpp; 0 where it is not known). Far beyond
+// any physical response of a model started there and so loaded, in whatever
+// units, yet reached long before a diverging state overflows, so such a run
 // stops naming the DOF instead of running on with inf or NaN.
-inline double default_max_displacement(const Vector& u, const Vector& v, double duration) {
+inline double default_max_displacement(const Vector& u, const Vector& v, double duration, double load_scale = 0.0) {
   double scale = 1.0;
   if (u.size() > 0) scale = std::max(scale, u.cwiseAbs().maxCoeff());
   if (v.size() > 0) scale = std::max(scale, v.cwiseAbs().maxCoeff() * std::abs(duration));
+  if (std::isfinite(load_scale)) scale = std::max(scale, load_scale);
   return kBoundFactor * scale;
 }
 

@@ -9,8 +9,10 @@
 #include <exception>
 #include <limits>
 #include <optional>
+#include <string>
 #include <type_traits>
 #include <utility>
+#include <vector>
 #if defined(__GLIBCXX__)
 #include <cxxabi.h>  // abi::__forced_unwind
 #endif
@@ -23,9 +25,10 @@
 
 namespace nvib {
 
-// Names the first offending quantity: u beyond the bound or non-finite, then v, then a.
+// Names the first offending quantity: u beyond the bound or non-finite, then v, then a; `why` says
+// where the bound comes from.
 template <class Stepper>
-Failure divergence(const Stepper& st, std::int64_t step, double bound) {
+Failure divergence(const Stepper& st, std::int64_t step, double bound, const std::string& why = std::string()) {
   Failure f;
   f.status = Status::diverged;
   f.step = step;
@@ -47,8 +50,50 @@ Failure divergence(const Stepper& st, std::int64_t step, double bound) {
   const bool beyond = std::isfinite(value);
   f.message = "diverged at t = " + detail::fmt(f.t) + " (step " + std::to_string(step) + "): " + what + "[" +
               std::to_string(f.dof) + "] = " + detail::fmt(value) +
-              (beyond ? " beyond the bound " + detail::fmt(bound) : std::string(", not finite"));
+              (beyond ? " beyond the bound " + detail::fmt(bound) + why : std::string(", not finite"));
   return f;
+}
+
+// The displacement the model's declared loads may cause over a run from t0 to t1: max over the DOFs of
+// max_t |P_i(t)| / (max(K_ii, 0) + M_ii / T^2), T = t1 - t0. P is the force of the declared effects at
+// rest (u = v = 0: the loads, the ground motions, any preload), at t0 alone if none depends on time,
+// else at 65 times spread over [t0, t1]; K_ii is the diagonal of the linear K plus the effects' tangent
+// at rest. It is the static displacement of DOF i under that load held by its own stiffness, and,
+// where there is little, the displacement the load gives its mass over the run (P T^2 / M, a free
+// body): so a model in mm or um, or loaded hard in its own units, has a bound as far
+// above its response as one in m. 0 for a model without declared effects (a Python callable force is
+// not evaluated here: it may count or cost its calls). The effects are evaluated on a copy: the run's
+// own trial states and counters are left as they are.
+template <class ModelT>
+double load_displacement_scale(const ModelT& model, double t0, double t1) {
+  const effects::EffectSet* set = effect_set_of(model.nonlinear_force());
+  const double T = std::abs(t1 - t0);
+  if (set == nullptr || !(T > 0.0) || !std::isfinite(T)) return 0.0;
+  const Index n = model.size();
+  effects::EffectSet probe = *set;
+  const Vector zero = Vector::Zero(n);
+  Vector f(n), peak = Vector::Zero(n);
+  const int samples = set->uses_time() ? 64 : 0;
+  for (int k = 0; k <= samples; ++k) {
+    const double t = samples == 0 ? t0 : t0 + (t1 - t0) * static_cast<double>(k) / samples;
+    probe.eval(zero.data(), zero.data(), t, f.data());
+    peak = peak.cwiseMax(f.cwiseAbs());
+  }
+  Vector kd = Vector::Zero(n);
+  if (model.has_K()) kd = model.K().diagonal();
+  {
+    std::vector<Entry> ke, ce;
+    probe.tangent_entries(ke, ce);
+    std::vector<double> kv(ke.size()), cv(ce.size());
+    probe.tangent_values(zero, zero, t0, kv.data(), cv.data());
+    for (size_t k = 0; k < ke.size(); ++k)
+      if (ke[k].row == ke[k].col && std::isfinite(kv[k])) kd[ke[k].row] += kv[k];
+  }
+  const Vector hold = kd.cwiseMax(0.0) + model.mass().diagonal_entries().cwiseAbs() / (T * T);
+  double scale = 0.0;
+  for (Index i = 0; i < n; ++i)
+    if (peak[i] > 0.0 && hold[i] > 0.0) scale = std::max(scale, peak[i] / hold[i]);
+  return std::isfinite(scale) ? scale : 0.0;
 }
 
 // Integer tests on the bits of the state, with no floating-point dependency
@@ -118,6 +163,10 @@ struct NoObserver {
 template <class Stepper, class Observer = NoObserver>
 Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe = Observer{}) {
   using clock = std::chrono::steady_clock;
+  // The default divergence bound, before the clock starts: it is set-up, not stepping.
+  const double load_scale = std::isnan(opt.max_displacement) && std::isfinite(t_end)
+                                ? load_displacement_scale(st.model(), st.time(), t_end)
+                                : 0.0;
   const auto start = clock::now();
   const Index n = st.size();
   NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
@@ -189,8 +238,14 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   if (peaks) peaks->update(st);
 
   const Stats before = st.stats();
-  const double bound = std::isnan(opt.max_displacement) ? default_max_displacement(st.u(), st.v(), t_end - st.time())
-                                                        : opt.max_displacement;
+  const double bound = std::isnan(opt.max_displacement)
+                           ? default_max_displacement(st.u(), st.v(), t_end - st.time(), load_scale)
+                           : opt.max_displacement;
+  const std::string why =
+      std::isnan(opt.max_displacement)
+          ? " (the default: 1e10 x the run's displacement scale, the largest of 1, max|u0|, max|v0| x its duration "
+            "and the static displacement of its loads)"
+          : std::string();
   double max_residual = std::numeric_limits<double>::quiet_NaN();
   // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
   std::int64_t to_save = k, done = 0;
@@ -216,7 +271,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         // non-finite in every scheme, so a run still stops within one step, and no saved row holds a
         // non-finite value.
         if (!displacement_ok(st.u(), bound) || (saving && !rates_ok(st.v(), st.a()))) {
-          res.failure = divergence(st, i, bound);
+          res.failure = divergence(st, i, bound, why);
           s = Status::diverged;
         }
       } else {
