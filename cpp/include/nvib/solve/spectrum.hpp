@@ -31,6 +31,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -292,7 +293,8 @@ inline void free_vibration_peak(const Oscillator& o, double u, double v, int kin
 
 // The recurrence x_{i+1} = M x_i + N0 g_i + N1 g_{i+1} over an interval h (exact).
 struct Recurrence {
-  double m00, m01, m10, m11, n00, n01, n10, n11;
+  double m00 = 0, m01 = 0, m10 = 0, m11 = 0, n00 = 0, n01 = 0, n10 = 0, n11 = 0;
+  Recurrence() = default;
   Recurrence(const Oscillator& o, double h) {
     interval_state(o, h, 1.0, 0.0, 0.0, 0.0, m00, m10);
     interval_state(o, h, 0.0, 1.0, 0.0, 0.0, m01, m11);
@@ -328,45 +330,58 @@ NVIB_NOINLINE inline void check_interval(const Oscillator& o, const Interval& I,
   examine(2, Ends{a0 + I.g0, a1 + g1, j0 + s, j1 + s, k0, k1, l0}, bound * std::sqrt(w2 + al2 * al2));
 }
 
-// One oscillator over the record: times t0 + i dt (times == nullptr) or times[i].
-inline void one_oscillator(const Oscillator& o, const double* ag, const double* times, Index n, double t0, double dt,
-                           const ElasticSpectrumOptions& opt, Peak* peaks) {
-  const double kappa = std::sqrt(o.w2 + 4.0 * o.alpha * o.alpha);
+// B oscillators over the record at once, times t0 + i dt (times == nullptr) or times[i]: their
+// recurrences are independent chains, interleaved so that one's latency hides the others'.
+template <int B>
+inline void oscillators(const Oscillator* o, const double* ag, const double* times, Index n, double t0, double dt,
+                        const ElasticSpectrumOptions& opt, std::array<Peak, 3>* peaks) {
   double h = times ? times[1] - times[0] : dt;
-  Recurrence r(o, h);
-  // at most one zero of a homogeneous solution in an interval with mu h < pi (zeros pi/mu apart)
-  bool wide = o.regime == 0 && o.mu * h >= 3.0;
-  double u = 0.0, v = 0.0;
+  Recurrence r[B];
+  bool wide[B];
+  double inv_kappa[B], u[B], v[B], limit[B];
+  auto coefficients = [&] {
+    for (int b = 0; b < B; ++b) {
+      r[b] = Recurrence(o[b], h);
+      // at most one zero of a homogeneous solution in an interval with mu h < pi (zeros pi/mu apart)
+      wide[b] = o[b].regime == 0 && o[b].mu * h >= 3.0;
+    }
+  };
+  coefficients();
+  for (int b = 0; b < B; ++b) {
+    inv_kappa[b] = 1.0 / std::sqrt(o[b].w2 + 4.0 * o[b].alpha * o[b].alpha);
+    u[b] = v[b] = limit[b] = 0.0;
+  }
   for (Index i = 0; i + 1 < n; ++i) {
-    if (times) {
-      const double hi = times[i + 1] - times[i];
-      if (hi != h) {
-        h = hi;
-        r = Recurrence(o, h);
-        wide = o.regime == 0 && o.mu * h >= 3.0;
-      }
+    if (times && times[i + 1] - times[i] != h) {
+      h = times[i + 1] - times[i];
+      coefficients();
     }
     const double g0 = ag[i], g1 = ag[i + 1];
-    const double u1 = r.m00 * u + r.m01 * v + r.n00 * g0 + r.n01 * g1;
-    const double v1 = r.m10 * u + r.m11 * v + r.n10 * g0 + r.n11 * g1;
     const double ts = times ? times[i] : t0 + static_cast<double>(i) * dt;
-    // the energy bound over the interval, against the smallest of the three scaled peaks
-    const double bound = std::sqrt(v * v + o.w2 * u * u) + h * std::max(std::abs(g0), std::abs(g1));
-    const double limit = std::min(std::min(o.w * peaks[0].value, peaks[1].value), peaks[2].value / kappa);
-    if (bound > limit) {
-      const Interval I{h, u, v, g0, (g1 - g0) / h};
-      check_interval(o, I, u1, v1, g1, bound, ts, wide, peaks);
-    }
     const double te = times ? times[i + 1] : t0 + static_cast<double>(i + 1) * dt;
-    peaks[0].offer(u1, te);
-    peaks[1].offer(v1, te);
-    peaks[2].offer(2.0 * o.alpha * v1 + o.w2 * u1, te);
-    u = u1;
-    v = v1;
+    const double hg = h * std::max(std::abs(g0), std::abs(g1));
+    for (int b = 0; b < B; ++b) {
+      const double u1 = r[b].m00 * u[b] + r[b].m01 * v[b] + r[b].n00 * g0 + r[b].n01 * g1;
+      const double v1 = r[b].m10 * u[b] + r[b].m11 * v[b] + r[b].n10 * g0 + r[b].n11 * g1;
+      // the energy bound over the interval, against the smallest of the three scaled peaks
+      const double bound = std::sqrt(v[b] * v[b] + o[b].w2 * u[b] * u[b]) + hg;
+      Peak* p = peaks[b].data();
+      if (bound > limit[b]) {
+        const Interval I{h, u[b], v[b], g0, (g1 - g0) / h};
+        check_interval(o[b], I, u1, v1, g1, bound, ts, wide[b], p);
+      }
+      p[0].offer(u1, te);
+      p[1].offer(v1, te);
+      p[2].offer(2.0 * o[b].alpha * v1 + o[b].w2 * u1, te);
+      limit[b] = std::min(std::min(o[b].w * p[0].value, p[1].value), p[2].value * inv_kappa[b]);
+      u[b] = u1;
+      v[b] = v1;
+    }
   }
   if (opt.free_vibration) {
     const double te = times ? times[n - 1] : t0 + static_cast<double>(n - 1) * dt;
-    for (int kind = 0; kind < 3; ++kind) free_vibration_peak(o, u, v, kind, te, peaks[kind]);
+    for (int b = 0; b < B; ++b)
+      for (int kind = 0; kind < 3; ++kind) free_vibration_peak(o[b], u[b], v[b], kind, te, peaks[b][kind]);
   }
 }
 
@@ -397,21 +412,32 @@ inline ElasticSpectrum run(const double* ag, const double* times, Index n, doubl
   out.periods = periods;
   out.damping = damping;
   for (Vector* x : {&out.Sd, &out.Sv, &out.PSv, &out.PSa, &out.Sa, &out.t_Sd, &out.t_Sv, &out.t_Sa}) x->resize(m);
+  std::vector<Oscillator> osc;
+  osc.reserve(static_cast<std::size_t>(m));
   for (Index i = 0; i < m; ++i) {
-    const Oscillator o(periods[i], damping[i]);
-    NVIB_CHECK(std::isfinite(o.w2) && o.w2 > 0.0, "periods",
+    osc.emplace_back(periods[i], damping[i]);
+    NVIB_CHECK(std::isfinite(osc.back().w2) && osc.back().w2 > 0.0, "periods",
                "the period " + detail::fmt(periods[i]) + " s gives a circular frequency whose square is not finite");
-    Peak peaks[3];
-    peaks[0].time = peaks[1].time = peaks[2].time = times ? times[0] : t0;
-    one_oscillator(o, ag, times, n, t0, dt, opt, peaks);
-    out.Sd[i] = peaks[0].value;
-    out.Sv[i] = peaks[1].value;
-    out.Sa[i] = peaks[2].value;
-    out.PSv[i] = o.w * peaks[0].value;
-    out.PSa[i] = o.w2 * peaks[0].value;
-    out.t_Sd[i] = peaks[0].time;
-    out.t_Sv[i] = peaks[1].time;
-    out.t_Sa[i] = peaks[2].time;
+  }
+  std::vector<std::array<Peak, 3>> peaks(static_cast<std::size_t>(m));
+  for (auto& q : peaks)
+    for (Peak& p : q) p.time = times ? times[0] : t0;
+  auto block = [&](Index i) { return peaks.data() + i; };
+  constexpr Index B = 8;  // oscillators interleaved: 8 hides the recurrence's latency best of 1, 2, 4, 8
+  Index i = 0;
+  for (; i + B <= m; i += B) oscillators<B>(osc.data() + i, ag, times, n, t0, dt, opt, block(i));
+  for (; i < m; ++i) oscillators<1>(osc.data() + i, ag, times, n, t0, dt, opt, block(i));
+  for (i = 0; i < m; ++i) {
+    const Peak* p = peaks[static_cast<std::size_t>(i)].data();
+    const Oscillator& o = osc[static_cast<std::size_t>(i)];
+    out.Sd[i] = p[0].value;
+    out.Sv[i] = p[1].value;
+    out.Sa[i] = p[2].value;
+    out.PSv[i] = o.w * p[0].value;
+    out.PSa[i] = o.w2 * p[0].value;
+    out.t_Sd[i] = p[0].time;
+    out.t_Sv[i] = p[1].time;
+    out.t_Sa[i] = p[2].time;
   }
   return out;
 }
