@@ -204,3 +204,21 @@ def test_runs_without_the_gil():
         th.join()
     for o in out:
         np.testing.assert_array_equal(o["Sd"], ref["Sd"])
+
+
+def test_rotd_of_one_component_and_of_two_equal_ones():
+    """u_theta = u1 cos(theta) + u2 sin(theta): with a2 = 0 the peak at theta is |cos theta| Sd1 (RotD100 = Sd1
+    at 0 degrees); with a2 = a1 it is |cos theta + sin theta| Sd1, largest at 45 degrees (sqrt(2) Sd1)."""
+    from nvib.analysis.spectrum import rotd_spectrum
+    rec = nvib.GroundMotion.from_at2(_sgm1_path())
+    a = np.asarray(rec.a)
+    periods = np.array([0.1, 0.7, 3.0])
+    sd1 = _core.elastic_spectrum(a, rec.dt, periods, 0.05)["Sd"]
+    one = rotd_spectrum(a, np.zeros_like(a), rec.dt, periods, 0.05)
+    theta = np.radians(one["angles"])
+    np.testing.assert_allclose(one["Sd"], np.abs(np.cos(theta))[:, None] * sd1, rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(one["RotD100"], sd1, rtol=1e-15)
+    np.testing.assert_allclose(one["RotD50"], np.median(np.abs(np.cos(theta))) * sd1, rtol=1e-12)
+    two = rotd_spectrum(a, a, rec.dt, periods, 0.05)
+    np.testing.assert_allclose(two["RotD100"], math.sqrt(2) * sd1, rtol=1e-12)
+    np.testing.assert_allclose(two["RotD100_PSa"], (2 * math.pi / periods) ** 2 * two["RotD100"], rtol=1e-15)
