@@ -109,6 +109,21 @@ inline void bind_spectrum(py::module_& m) {
       py::arg("times"), py::arg("ag"), py::arg("periods"), py::arg("damping") = 0.05, py::kw_only(),
       py::arg("per_period") = false, py::arg("free_vibration") = true,
       "elastic_spectrum for samples at increasing times (any spacing).");
+  m.def(
+      "rotated_sd",
+      [](const Vector& a1, const Vector& a2, double dt, const Vector& periods, const py::object& damping,
+         const Vector& angles) {
+        Vector z;
+        if (py::isinstance<py::float_>(damping) || py::isinstance<py::int_>(damping))
+          z = Vector::Constant(1, damping.cast<double>());
+        else
+          z = damping.cast<Vector>();
+        py::gil_scoped_release nogil;
+        return nvib::rotated_sd(a1, a2, dt, periods, z, angles);
+      },
+      py::arg("a1"), py::arg("a2"), py::arg("dt"), py::arg("periods"), py::arg("damping"), py::arg("angles"),
+      "Sd (angles x periods) of the oscillators under a1 cos(theta) + a2 sin(theta) at each angle [degrees],\n"
+      "exactly; damping: one value or one per period.");
 }
 
 }  // namespace nvib_py

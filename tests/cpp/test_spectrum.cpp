@@ -171,6 +171,23 @@ int main() {
     CHECK_REL(s.Sv[0], max_abs(v, 0.0, L), 1e-11);
     CHECK_REL(s.Sa[0], max_abs(abs_a, 0.0, L), 1e-11);
   }
+  // rotated components: a2 = 0 gives |cos theta| Sd of a1; a2 = a1 gives |cos theta + sin theta| Sd
+  {
+    Vector a1 = ramp_record(1.0, 0.01, 301), zero = Vector::Zero(301), angles(4);
+    for (int i = 0; i < 301; ++i) a1[i] = std::sin(0.37 * i) * std::exp(-0.01 * i);
+    angles << 0.0, 30.0, 45.0, 120.0;
+    const Vector P = (Vector(3) << 0.013, 0.4, 2.0).finished(), Z = Vector::Constant(1, 0.05);
+    const auto s = nvib::elastic_spectrum(a1, 0.01, P, Z);
+    const nvib::Matrix one = nvib::rotated_sd(a1, zero, 0.01, P, Z, angles);
+    const nvib::Matrix two = nvib::rotated_sd(a1, a1, 0.01, P, Z, angles);
+    for (int k = 0; k < 4; ++k) {
+      const double th = angles[k] * kPi / 180.0;
+      for (int i = 0; i < 3; ++i) {
+        CHECK_REL(one(k, i), std::abs(std::cos(th)) * s.Sd[i], 1e-12);
+        CHECK_REL(two(k, i), std::abs(std::cos(th) + std::sin(th)) * s.Sd[i], 1e-12);
+      }
+    }
+  }
   // errors name the argument
   auto names = [](const std::function<void()>& f, const std::string& arg) {
     try {

@@ -222,3 +222,29 @@ def test_rotd_of_one_component_and_of_two_equal_ones():
     two = rotd_spectrum(a, a, rec.dt, periods, 0.05)
     np.testing.assert_allclose(two["RotD100"], math.sqrt(2) * sd1, rtol=1e-12)
     np.testing.assert_allclose(two["RotD100_PSa"], (2 * math.pi / periods) ** 2 * two["RotD100"], rtol=1e-15)
+
+
+def test_rotated_sd_is_the_spectrum_of_the_rotated_record():
+    """rotated_sd combines the responses to the two components; each angle's Sd equals the kernel's Sd of
+    the rotated record itself."""
+    rec = nvib.GroundMotion.from_at2(_sgm1_path())
+    a1 = np.asarray(rec.a)
+    a2 = np.roll(a1, 150) * 0.7
+    periods = np.array([0.015, 0.2, 1.1, 4.0])
+    angles = np.array([0.0, 17.0, 45.0, 90.0, 133.0])
+    sd = _core.rotated_sd(a1, a2, rec.dt, periods, 0.05, angles)
+    for k, th in enumerate(np.radians(angles)):
+        one = _core.elastic_spectrum(math.cos(th) * a1 + math.sin(th) * a2, rec.dt, periods, 0.05)
+        np.testing.assert_allclose(sd[k], one["Sd"], rtol=1e-12)
+
+
+@pytest.mark.parametrize("call, argument", [
+    (lambda a: _core.rotated_sd(a, a[:-1], 0.01, [1.0], 0.05, [0.0]), "a2"),
+    (lambda a: _core.rotated_sd(a, a, 0.01, [1.0], 0.05, []), "angles"),
+    (lambda a: _core.rotated_sd(a, a, 0.01, [-1.0], 0.05, [0.0]), "periods"),
+    (lambda a: _core.rotated_sd(a, a, 0.0, [1.0], 0.05, [0.0]), "dt"),
+])
+def test_rotated_sd_bad_input_names_the_argument(call, argument):
+    with pytest.raises(nvib.ArgumentError) as info:
+        call(np.ones(10))
+    assert info.value.argument == argument

@@ -277,19 +277,15 @@ def rotd_spectrum(a1, a2, dt: float, periods, damping: float = 0.05, *, angles: 
                   percentiles=(50.0, 100.0)) -> dict:
     """RotDnn of two horizontal components sampled dt apart (Boore 2010): for each angle theta of ``angles``
     evenly spaced in [0, 180) degrees, the exact peak Sd of the oscillator under a1 cos(theta) + a2 sin(theta)
-    (nvib._core.elastic_spectrum: peaks between samples, free vibration after the record), then per period
-    the given percentiles over the angles (50: RotD50, 100: RotD100, the largest). Returns {"periods",
-    "angles" (degrees), "Sd" (angles x periods), and per percentile p: "RotD<p>" of Sd and "RotD<p>_PSa"}."""
-    a1 = _checks.real_array("a1", a1)
-    a2 = _checks.real_array("a2", a2)
-    if a1.shape != a2.shape or a1.ndim != 1:
-        raise _checks.value_error("a2", f"expected the shape of a1 {a1.shape}, got {a2.shape}")
+    (nvib._core.rotated_sd: the responses to a1 and a2 combined, peaks between samples, free vibration after
+    the record), then per period the given percentiles over the angles (50: RotD50, 100: RotD100, the
+    largest). Returns {"periods", "angles" (degrees), "Sd" (angles x periods), and per percentile p:
+    "RotD<p>" of Sd and "RotD<p>_PSa"}."""
     if not isinstance(angles, (int, np.integer)) or angles < 1:
         raise _checks.value_error("angles", f"expected a whole number >= 1, got {angles!r}")
     periods = np.atleast_1d(np.asarray(periods, dtype=float))
     theta = np.arange(angles) * (180.0 / angles)
-    c, s = np.cos(np.radians(theta)), np.sin(np.radians(theta))
-    sd = np.stack([_core.elastic_spectrum(ci * a1 + si * a2, dt, periods, damping)["Sd"] for ci, si in zip(c, s)])
+    sd = _core.rotated_sd(np.asarray(a1, dtype=float), np.asarray(a2, dtype=float), dt, periods, damping, theta)
     w2 = (2.0 * math.pi / periods) ** 2
     out = {"periods": periods, "angles": theta, "Sd": sd}
     for p in percentiles:

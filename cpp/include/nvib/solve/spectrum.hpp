@@ -392,9 +392,7 @@ inline void check_record(const double* ag, Index n) {
                                                "; every sample must be finite");
 }
 
-inline ElasticSpectrum run(const double* ag, const double* times, Index n, double t0, double dt,
-                           const Vector& periods, const Vector& damping, const ElasticSpectrumOptions& opt) {
-  check_record(ag, n);
+inline void check_oscillators(const Vector& periods, const Vector& damping) {
   NVIB_CHECK(periods.size() > 0, "periods", "expected at least one period");
   NVIB_CHECK(damping.size() == periods.size(), "damping",
              "expected one damping per period (" + std::to_string(periods.size()) + "), got " +
@@ -407,6 +405,12 @@ inline ElasticSpectrum run(const double* ag, const double* times, Index n, doubl
     NVIB_CHECK(std::isfinite(damping[i]) && damping[i] >= 0.0, "damping",
                "every damping ratio must be finite and >= 0, got " + detail::fmt(damping[i]) + " at index " +
                    std::to_string(i));
+}
+
+inline ElasticSpectrum run(const double* ag, const double* times, Index n, double t0, double dt,
+                           const Vector& periods, const Vector& damping, const ElasticSpectrumOptions& opt) {
+  check_record(ag, n);
+  check_oscillators(periods, damping);
   const Index m = periods.size();
   ElasticSpectrum out;
   out.periods = periods;
@@ -440,6 +444,63 @@ inline ElasticSpectrum run(const double* ag, const double* times, Index n, doubl
     out.t_Sa[i] = p[2].time;
   }
   return out;
+}
+
+// Sd of one oscillator under a1 cos(theta) + a2 sin(theta) for each angle (column `col` of sd): the
+// oscillator is linear, so its response is u1 cos(theta) + u2 sin(theta) from the histories under a1
+// and a2, found once. Per angle, the peak at the samples and in the free vibration first; then the
+// intervals whose bound can exceed it are searched as in check_interval. An interval is skipped for
+// every angle at once when the bound of the two-component response (the norm of (u1, u2), whose
+// energy grows by at most |(a1, a2)| per unit time) is below the smallest angle's peak.
+inline void rotd_oscillator(const Oscillator& o, const double* a1, const double* a2, Index n, double dt,
+                            const Vector& cosines, const Vector& sines, Matrix& sd, Index col) {
+  const Recurrence r(o, dt);
+  const bool wide = o.regime == 0 && o.mu * dt >= 3.0;
+  std::vector<double> U1(static_cast<std::size_t>(n)), V1(U1.size()), U2(U1.size()), V2(U1.size());
+  U1[0] = V1[0] = U2[0] = V2[0] = 0.0;
+  for (Index i = 0; i + 1 < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    U1[k + 1] = r.m00 * U1[k] + r.m01 * V1[k] + r.n00 * a1[i] + r.n01 * a1[i + 1];
+    V1[k + 1] = r.m10 * U1[k] + r.m11 * V1[k] + r.n10 * a1[i] + r.n11 * a1[i + 1];
+    U2[k + 1] = r.m00 * U2[k] + r.m01 * V2[k] + r.n00 * a2[i] + r.n01 * a2[i + 1];
+    V2[k + 1] = r.m10 * U2[k] + r.m11 * V2[k] + r.n10 * a2[i] + r.n11 * a2[i + 1];
+  }
+  const Index na = cosines.size();
+  std::vector<Peak> peaks(static_cast<std::size_t>(na));
+  double smallest = std::numeric_limits<double>::infinity();
+  for (Index k = 0; k < na; ++k) {
+    const double c = cosines[k], s = sines[k];
+    double p = 0.0;
+    for (std::size_t i = 0; i < U1.size(); ++i) p = std::max(p, std::abs(c * U1[i] + s * U2[i]));
+    Peak& pk = peaks[static_cast<std::size_t>(k)];
+    pk.value = p;
+    const std::size_t last = U1.size() - 1;
+    free_vibration_peak(o, c * U1[last] + s * U2[last], c * V1[last] + s * V2[last], 0, 0.0, pk);
+    smallest = std::min(smallest, pk.value);
+  }
+  const double h2 = 0.125 * dt * dt, al2 = 2.0 * o.alpha, w2 = o.w2;
+  for (Index i = 0; i + 1 < n; ++i) {
+    const auto j = static_cast<std::size_t>(i);
+    const double g = std::max(std::hypot(a1[i], a2[i]), std::hypot(a1[i + 1], a2[i + 1]));
+    const double e2 = V1[j] * V1[j] + V2[j] * V2[j] + w2 * (U1[j] * U1[j] + U2[j] * U2[j]);
+    if (std::sqrt(e2) + dt * g <= o.w * smallest) continue;
+    for (Index k = 0; k < na; ++k) {
+      const double c = cosines[k], s = sines[k];
+      Peak& pk = peaks[static_cast<std::size_t>(k)];
+      const double u0 = c * U1[j] + s * U2[j], v0 = c * V1[j] + s * V2[j];
+      const double u1 = c * U1[j + 1] + s * U2[j + 1], v1 = c * V1[j + 1] + s * V2[j + 1];
+      const double g0 = c * a1[i] + s * a2[i], g1 = c * a1[i + 1] + s * a2[i + 1];
+      if (std::sqrt(v0 * v0 + w2 * u0 * u0) + dt * std::max(std::abs(g0), std::abs(g1)) <= o.w * pk.value) continue;
+      const Interval I{dt, u0, v0, g0, (g1 - g0) / dt};
+      const double a0 = -g0 - al2 * v0 - w2 * u0, a1e = -g1 - al2 * v1 - w2 * u1;
+      const double j0 = -I.s - al2 * a0 - w2 * v0;
+      if (std::max(std::abs(u0), std::abs(u1)) + h2 * std::sqrt(a0 * a0 + j0 * j0 / w2) <= pk.value) continue;
+      auto changes = [](double x, double y) { return !(x < 0.0 && y < 0.0) && !(x > 0.0 && y > 0.0); };
+      if (wide || changes(v0, v1) || changes(a0, a1e))
+        search_interval(o, I, 0, Ends{u0, u1, v0, v1, a0, a1e, j0}, 0.0, pk);
+    }
+  }
+  for (Index k = 0; k < na; ++k) sd(k, col) = peaks[static_cast<std::size_t>(k)].value;
 }
 
 }  // namespace spectrum_detail
@@ -481,6 +542,31 @@ inline ElasticSpectrum elastic_spectrum_grid(const CVecRef& ag, double dt, const
   check_time_step(dt);
   check_start_time(t0);
   return spectrum_detail::run(ag.data(), nullptr, ag.size(), t0, dt, P, Z, opt);
+}
+
+// Sd of each oscillator (periods[i], damping[i], or damping[0] for all) under the two horizontal
+// components a1, a2 (samples dt apart) rotated to each angle [degrees]: a1 cos(theta) + a2 sin(theta),
+// exactly (peaks between samples, free vibration after the record); rows: angles, columns: periods.
+// RotD50 and RotD100 (Boore 2010) are the median and the largest of each column over 0..179 degrees.
+inline Matrix rotated_sd(const CVecRef& a1, const CVecRef& a2, double dt, const CVecRef& periods,
+                         const CVecRef& damping, const CVecRef& angles_deg) {
+  check_time_step(dt);
+  spectrum_detail::check_record(a1.data(), a1.size());
+  NVIB_CHECK(a2.size() == a1.size(), "a2",
+             "expected as many samples as a1 (" + std::to_string(a1.size()) + "), got " + std::to_string(a2.size()));
+  spectrum_detail::check_record(a2.data(), a2.size());
+  NVIB_CHECK(angles_deg.size() > 0, "angles", "expected at least one angle");
+  for (Index k = 0; k < angles_deg.size(); ++k)
+    NVIB_CHECK(std::isfinite(angles_deg[k]), "angles", "every angle must be finite");
+  const Vector z = damping.size() == 1 ? Vector::Constant(periods.size(), damping[0]) : Vector(damping);
+  spectrum_detail::check_oscillators(periods, z);
+  const Vector rad = angles_deg * (spectrum_detail::kPi / 180.0);
+  const Vector c = rad.array().cos(), s = rad.array().sin();
+  Matrix sd(angles_deg.size(), periods.size());
+  for (Index i = 0; i < periods.size(); ++i)
+    spectrum_detail::rotd_oscillator(spectrum_detail::Oscillator(periods[i], z[i]), a1.data(), a2.data(), a1.size(),
+                                     dt, c, s, sd, i);
+  return sd;
 }
 
 }  // namespace nvib
