@@ -5,6 +5,7 @@
 #include "bind_result.hpp"
 #include "bind_run.hpp"
 #include "bind_schemes.hpp"
+#include "bind_spectrum.hpp"
 #include "bind_types.hpp"
 
 PYBIND11_MODULE(_core, m) {
@@ -14,4 +15,5 @@ PYBIND11_MODULE(_core, m) {
   nvib_py::bind_models(m);
   nvib_py::bind_result(m);
   nvib_py::bind_run(m);
+  nvib_py::bind_spectrum(m);
 }

@@ -7,7 +7,7 @@
 //   effects/  the laws and the declared effects that make a model's f
 //   newton/   the Newton component: its options, the iteration matrix, the linear system
 //   schemes/  the scheme contract, the stepper, the registry of schemes
-//   solve/    the one loop and its observers
+//   solve/    the one loop and its observers; the exact elastic spectrum (spectrum.hpp, base/ only)
 #pragma once
 
 #include "base/types.hpp"
@@ -21,3 +21,4 @@
 #include "schemes/scheme.hpp"
 #include "schemes/stepper.hpp"
 #include "solve/solve.hpp"
+#include "solve/spectrum.hpp"
