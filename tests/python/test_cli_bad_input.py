@@ -144,7 +144,7 @@ NON_FINITE = [
     (["spectrum", "rec.txt", "--dt", "inf"], "--dt"), (["spectrum", "rec.txt", "--dt", "0.01", "--scale", "nan"],
                                                        "--scale"),
     (["spectrum", "rec.txt", "--dt", "0.01", "--damping", "inf"], "--damping"),
-    (["spectrum", "rec.txt", "--dt", "0.01", "--accuracy", "nan"], "--accuracy"),
+    (["spectrum", "rec.txt", "--dt", "0.01", "--scheme", "newmark", "--accuracy", "nan"], "--accuracy"),
     (["spectrum", "rec.txt", "--dt", "0.01", "--periods", "0.1,inf"], "--periods"),
     (["spectrum", "rec.txt", "--dt", "0.01", "--periods", "0.1,nan"], "--periods"),
     (["spectrum", "rec.txt", "--dt", "0.01", "--periods", "0.1:inf:3"], "--periods"),
@@ -167,14 +167,28 @@ def test_non_finite_numbers_name_the_option(paths, argv, flag):
 def test_spectrum_refuses_runs_that_cannot_be_made(paths, argv, flag, needle):
     """Periods whose runs would not fit in memory, and an accuracy below round-off, are refused before
     any run, naming the option (not the dt the spectrum derives from them)."""
-    p = nvib_subprocess("spectrum", *argv, "--dt", "0.01", cwd=paths["dir"], timeout=60)
+    p = nvib_subprocess("spectrum", *argv, "--dt", "0.01", "--scheme", "newmark", cwd=paths["dir"], timeout=60)
     last = assert_bad_input(p, "spectrum", flag)
     assert needle in last and "argument --dt" not in last
 
 
+def test_the_exact_spectrum_refuses_what_it_cannot_compute(paths):
+    """Without --scheme the spectrum is exact: a period whose frequency squared is not finite names
+    --periods, a record too large for doubles names the record, --accuracy is refused as meaningless."""
+    last = assert_bad_input(nvib_subprocess("spectrum", "rec.txt", "--dt", "0.01", "--periods", "1e-300",
+                                            cwd=paths["dir"]), "spectrum", "--periods")
+    assert "not finite" in last
+    last = assert_bad_input(nvib_subprocess("spectrum", "rec.txt", "--dt", "0.01", "--scale", "1e308",
+                                            "--periods", "0.5,1", cwd=paths["dir"]), "spectrum", "record")
+    assert "too large for doubles" in last
+    last = assert_bad_input(nvib_subprocess("spectrum", "rec.txt", "--dt", "0.01", "--accuracy", "1e-3",
+                                            cwd=paths["dir"]), "spectrum", "--accuracy")
+    assert "exact" in last
+
+
 def test_spectrum_failing_run_exits_1_naming_its_period(paths):
     p = nvib_subprocess("spectrum", "rec.txt", "--dt", "0.01", "--scale", "1e308", "--periods", "0.5,1",
-                        cwd=paths["dir"])
+                        "--scheme", "newmark", cwd=paths["dir"])
     last = assert_failed_run(p, "spectrum")
     assert "the run at T = 0.5 s" in last and "diverged" in last and "Newmark" in last
 

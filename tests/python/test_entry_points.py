@@ -119,7 +119,7 @@ def calls(files) -> dict:
         "scheme_label": (nvib.scheme_label, (nvib.Newmark(),), {}),
         "solve": (nvib.solve, (osc, nvib.Newmark()), dict(run)),
         "solve_many": (nvib.solve_many, ([osc], nvib.Newmark()), dict(run, threads=1, progress=False)),
-        "spectrum": (nvib.spectrum, (record, [0.5]), {"max_halvings": 0}),
+        "spectrum": (nvib.spectrum, (record, [0.5]), {"scheme": nvib.Newmark(), "max_halvings": 0}),
         "exact.forced_linear_sdof": (exact.forced_linear_sdof, ([0.0, 0.1],), {"m": 1.0, "k": 4.0, "amplitude": 1.0,
                                                                              "omega": 3.0}),
         "exact.hardening": (exact.hardening, ([0.0, 0.1],), {}),

@@ -154,14 +154,14 @@ def _record():
 
 @pytest.mark.parametrize("halvings, exc", [(-1, ValueError), (1.5, TypeError), ("2", TypeError)])
 def test_spectrum_max_halvings_must_be_a_non_negative_integer(halvings, exc):
-    refused(exc, "max_halvings", nvib.spectrum, _record(), [0.5], max_halvings=halvings)
+    refused(exc, "max_halvings", nvib.spectrum, _record(), [0.5], scheme=nvib.Newmark(), max_halvings=halvings)
 
 
 def test_a_spectrum_whose_error_is_not_finite_misses_its_accuracy(monkeypatch):
-    first = nvib.spectrum(_record(), [0.5], max_halvings=2)
-    monkeypatch.setattr(spectrum_module, "exact_sdof_peaks", lambda t, ag, periods, damping: (
-        np.full(len(periods), np.nan), np.full(len(periods), np.nan)))
-    sp = nvib.spectrum(_record(), [0.5], max_halvings=2)
+    first = nvib.spectrum(_record(), [0.5], scheme=nvib.Newmark(), max_halvings=2)
+    monkeypatch.setattr(spectrum_module._core, "elastic_spectrum_at", lambda t, ag, periods, damping, **kw: {
+        "Sd": np.full(len(periods), np.nan), "Sa": np.full(len(periods), np.nan)})
+    sp = nvib.spectrum(_record(), [0.5], scheme=nvib.Newmark(), max_halvings=2)
     assert np.isnan(sp.error[0])
     # halved as far as allowed, as for any error above the accuracy: two halvings, and dt is the step of the
     # last runs, the ones the error is of

@@ -54,14 +54,15 @@ def test_exact_solution_against_an_ode_solver_and_itself():
 def test_elastic_spectrum_meets_the_requested_accuracy(accuracy):
     gm = record()
     periods = np.geomspace(0.05, 3.0, 25)
-    sp = nvib.spectrum(gm, periods, damping=0.05, accuracy=accuracy)
-    assert sp.check == "exact" and np.all(sp.error <= accuracy)
-    # independently: the exact peaks on the grid each period ran on
+    sp = nvib.spectrum(gm, periods, damping=0.05, scheme=nvib.Newmark(), accuracy=accuracy)
+    assert sp.check == "exact check" and np.all(sp.error <= accuracy)
+    # independently: the true peaks (between samples too) over the span each period ran, Sd and absolute Sa
     t_end = gm.t[-1] + 2 * periods.max()
     for k in (0, 12, 24):
         grid = np.arange(0.0, t_end + sp.dt[k] / 2, sp.dt[k])
-        sd, _ = exact_sdof_peaks(grid, gm(grid), [periods[k]], 0.05)
-        assert abs(sp.Sd[k] - sd[0]) <= accuracy * sd[0]
+        true = nvib._core.elastic_spectrum_at(grid, gm(grid), [periods[k]], 0.05, free_vibration=False)
+        assert abs(sp.Sd[k] - true["Sd"][0]) <= accuracy * true["Sd"][0]
+        assert abs(sp.Sa[k] - true["Sa"][0]) <= accuracy * true["Sa"][0]
     w = 2 * math.pi / periods
     np.testing.assert_allclose(sp.PSv, w * sp.Sd, rtol=1e-15)
     np.testing.assert_allclose(sp.PSa, w * w * sp.Sd, rtol=1e-15)
@@ -71,7 +72,7 @@ def test_elastic_spectrum_meets_the_requested_accuracy(accuracy):
 def test_inelastic_spectrum_checks_itself_by_step_halving():
     gm = record()
     periods = [0.1, 0.5, 1.5]
-    linear = nvib.spectrum(gm, periods, accuracy=1e-3)
+    linear = nvib.spectrum(gm, periods)
     # a hardening spring with a = 0 is the linear spring: the same spectrum, checked by halving instead
     same = nvib.spectrum(gm, periods, accuracy=1e-3, law={"type": "hardening_spring", "a": 0.0})
     assert same.check == "half step" and np.all(same.error <= 1e-3)
@@ -82,8 +83,9 @@ def test_inelastic_spectrum_checks_itself_by_step_halving():
 
 def test_arguments_named():
     gm = record()
-    for kw, arg in ((dict(periods=[0.1, -1.0]), "periods"), (dict(periods=[0.1], damping=1.5), "damping"),
-                    (dict(periods=[0.1], accuracy=0.0), "accuracy")):
+    for kw, arg in ((dict(periods=[0.1, -1.0]), "periods"), (dict(periods=[0.1], damping=-0.5), "damping"),
+                    (dict(periods=[0.1], scheme=nvib.Newmark(), damping=1.5), "damping"),
+                    (dict(periods=[0.1], scheme=nvib.Newmark(), accuracy=0.0), "accuracy")):
         with pytest.raises(nvib.ArgumentError) as exc:
             nvib.spectrum(gm, **kw)
         assert exc.value.argument == arg
@@ -103,7 +105,7 @@ def test_runs_that_would_not_fit_in_memory_are_refused_naming_periods():
              (dict(periods=[0.1], accuracy=1e-300), "accuracy", "must be >= 1e-09")]
     for kw, arg, needle in cases:
         with pytest.raises(nvib.ArgumentError) as exc:
-            nvib.spectrum(gm, **kw)
+            nvib.spectrum(gm, scheme=nvib.Newmark(), **kw)
         assert exc.value.argument == arg and needle in str(exc.value), str(exc.value)
         assert "dt:" not in str(exc.value)
 
@@ -118,14 +120,14 @@ def test_a_halving_that_would_not_fit_is_not_made(monkeypatch):
     dt = gm.dt / math.ceil(gm.dt / (T * math.sqrt(12 * accuracy) / (2 * math.pi)))
     need = module._memory_needed(1, (gm.t[-1] + 2 * T) / dt, True)
     monkeypatch.setattr(module._core, "available_memory", lambda: 3.0 * need)  # a limit of 1.5 x need
-    sp = nvib.spectrum(gm, [T], accuracy=accuracy)
+    sp = nvib.spectrum(gm, [T], scheme=nvib.Newmark(), accuracy=accuracy)
     assert sp.dt[0] == pytest.approx(dt) and sp.error[0] > accuracy
 
 
 def test_a_failed_run_names_its_period():
     gm = record().scaled(1e306)
     with pytest.raises(nvib.DivergenceError, match=r"the run at T = 0\.5 s \(dt = [0-9.e-]+ s\) failed: diverged"):
-        nvib.spectrum(gm, [0.5, 1.0])
+        nvib.spectrum(gm, [0.5, 1.0], scheme=nvib.Newmark())
 
 
 def test_command_line(tmp_path, capsys):
@@ -141,8 +143,51 @@ def test_command_line(tmp_path, capsys):
     assert lines[0].startswith("damping,period,Sd") and len(lines) == 1 + 2 * 3
     sp = nvib.spectrum(gm, [0.1, 0.5, 2.0], damping=0.05)
     assert float(lines[4].split(",")[2]) == sp.Sd[0]  # the CSV holds the library's numbers
-    for argv, arg in ((["spectrum", str(path)], "--dt"), (["spectrum", str(path), "--dt", "0.01", "--damping", "2"],
-                                                          "--damping")):
+    for argv, arg in ((["spectrum", str(path)], "--dt"),
+                      (["spectrum", str(path), "--dt", "0.01", "--damping", "-0.1"], "--damping"),
+                      (["spectrum", str(path), "--dt", "0.01", "--scheme", "newmark", "--damping", "2"], "--damping")):
         with pytest.raises(SystemExit) as exc:
             main(argv)
         assert exc.value.code == 2 and f"argument {arg}" in capsys.readouterr().err
+
+
+# ---- the exact elastic spectrum (the default) ----------------------------------------------------------------
+
+def test_the_elastic_spectrum_is_the_exact_kernels():
+    gm = record()
+    periods = np.geomspace(0.02, 5.0, 40)
+    sp = nvib.spectrum(gm, periods, damping=0.05)
+    ref = nvib._core.elastic_spectrum(gm.a, gm.dt, periods, 0.05)
+    assert sp.check == "exact" and sp.error is None and np.all(sp.dt == gm.dt)
+    for k in ("Sd", "Sv", "PSv", "PSa", "Sa"):
+        np.testing.assert_array_equal(getattr(sp, k), ref[k])
+    w = 2 * math.pi / periods
+    np.testing.assert_allclose(sp.PSa, w * w * sp.Sd, rtol=1e-15)
+    # never below the peaks at the samples (exact_sdof_peaks looks only there), and above them by more than
+    # 1 % at some short period, where the peak falls between samples
+    sampled, _ = exact_sdof_peaks(gm.t, gm.a, periods, 0.05)
+    assert np.all(sp.Sd >= sampled * (1 - 1e-12)) and np.max(sp.Sd / sampled) > 1.01
+
+
+def test_the_exact_spectrum_takes_several_damping_ratios_and_any_damping():
+    gm = record()
+    periods = [0.1, 0.5, 2.0]
+    sp = nvib.spectrum(gm, periods, damping=[0.02, 0.05, 1.5])
+    assert sp.Sd.shape == (3, 3) and list(sp.damping) == [0.02, 0.05, 1.5]
+    for row, z in enumerate((0.02, 0.05, 1.5)):
+        np.testing.assert_array_equal(sp.Sd[row], nvib.spectrum(gm, periods, damping=z).Sd)
+    assert np.all(sp.Sd[0] > sp.Sd[2])  # more damping, less response
+
+
+@pytest.mark.parametrize("kw", [dict(accuracy=1e-3), dict(t_end=10.0), dict(max_halvings=2), dict(threads=2)])
+def test_settings_of_runs_are_refused_by_the_exact_spectrum(kw):
+    (name,) = kw
+    with pytest.raises(nvib.ArgumentError, match=rf"^{name}: the elastic spectrum is exact") as exc:
+        nvib.spectrum(record(), [0.5], **kw)
+    assert exc.value.argument == name
+
+
+def test_a_record_too_large_for_doubles_is_named():
+    with pytest.raises(nvib.ArgumentError, match=r"^record: its response at T = 0\.5 s is not finite") as exc:
+        nvib.spectrum(record().scaled(1e306), [0.5, 1.0])
+    assert exc.value.argument == "record"

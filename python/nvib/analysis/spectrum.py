@@ -1,15 +1,19 @@
 """Response spectra of a ground-motion record.
 
 For each period T the SDOF u'' + 2 zeta w u' + w^2 u = -a_g(t) (w = 2 pi / T, unit mass; or with a
-declared nonlinear law in place of the linear spring) is integrated by an nvib scheme through
-``solve_many``: Sd = max |u|, pseudo-Sv = w Sd, pseudo-Sa = w^2 Sd, and the absolute Sa = max |u'' + a_g|.
+declared nonlinear law in place of the linear spring): Sd = max |u|, Sv = max |u'|, pseudo-Sv = w Sd,
+pseudo-Sa = w^2 Sd, and the absolute Sa = max |u'' + a_g|.
 
-The step follows from the period and the requested accuracy, sub-stepping the record (which is
-linear between its samples); for the elastic spectrum every Sd is then checked against the exact
-solution of the linear SDOF under the piecewise-linear record (Nigam & Jennings 1969), and the
-periods that miss the accuracy are run again at half the step, so the spectrum reports the accuracy
-it reached and what it cost. Without an exact solution (a nonlinear law), the check is against the
-same run at half the step.
+The elastic spectrum is exact: the closed-form response to the record, which is linear between its
+samples (Nigam & Jennings 1969; Chopra, Dynamics of Structures, section 5.2), for every period at once
+in C++ (nvib._core.elastic_spectrum), each interval's peak located between its samples, and the free
+vibration after the record followed until its peak can no longer grow.
+
+With a scheme, or a nonlinear law in place of the spring, each period's SDOF is integrated through
+``solve_many``, the step following from the period and the requested accuracy; the scheme's elastic
+spectrum is checked against the exact peaks (Sd and Sa, between samples), an inelastic one against the
+same run at half the step, and the periods that miss the accuracy are run again at half the step, so
+the spectrum reports the accuracy it reached and what it cost.
 """
 
 from __future__ import annotations
@@ -37,22 +41,33 @@ _WORK_ARRAYS = 16  # arrays of one double per saved state besides the histories:
 @dataclasses.dataclass
 class Spectrum:
     """Spectral values per period: ``periods`` [s], ``damping``, ``Sd`` (peak relative displacement),
-    ``PSv`` = w Sd, ``PSa`` = w^2 Sd, ``Sa`` (peak absolute acceleration), and per period the step
-    ``dt`` used, the relative ``error`` of Sd against the check (the exact solution for an elastic
-    spectrum), the ``wall_time`` of the runs, and ``check`` ("exact" or "half step")."""
+    ``Sv`` (peak relative velocity), ``PSv`` = w Sd, ``PSa`` = w^2 Sd and ``Sa`` (peak absolute
+    acceleration), in the record's units (Sd in those units times s^2).
+
+    ``check`` says how they were obtained and what ``error`` means:
+    - "exact": the closed-form response to the record, linear between its samples (Nigam & Jennings
+      1969), each peak located between samples and the free vibration after the record followed until
+      its peak can no longer grow; exact to round-off (about 1e-12 relative, measured against the same
+      record interpolated to 1/64 of its step), so ``error`` is None and ``dt`` the record's step;
+    - "exact check": runs of ``scheme``; ``error`` is the larger of the relative errors of Sd and Sa
+      against the exact peaks of the same span (between samples too), ``dt`` each period's step;
+    - "half step": runs of a nonlinear ``law``; ``error`` is the relative change of Sd when the step is
+      halved.
+    With several damping ratios the spectral values are arrays (dampings x periods)."""
 
     periods: np.ndarray
-    damping: float
+    damping: float | np.ndarray
     Sd: np.ndarray
     PSv: np.ndarray
     PSa: np.ndarray
     Sa: np.ndarray
     dt: np.ndarray
-    error: np.ndarray
+    error: np.ndarray | None
     wall_time: float
     check: str
     record: str = ""
     scheme: str = ""
+    Sv: np.ndarray | None = None
 
 
 def _exact_step(u, v, a0, a1, w, z, h):
@@ -128,22 +143,28 @@ def _sdof(period: float, damping: float, record: GroundMotion, law: dict | None)
     return Model([1.0], effects=effects, dofs=["u"])
 
 
-def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=None, law: dict | None = None,
-             accuracy: float = 1e-3, t_end: float | None = None, threads: int | None = None,
-             max_halvings: int = 4) -> Spectrum:
-    """The response spectrum of ``record`` at ``periods`` [s] (see the module's text).
+def spectrum(record: GroundMotion, periods, *, damping=0.05, scheme=None, law: dict | None = None,
+             accuracy: float | None = None, t_end: float | None = None, threads: int | None = None,
+             max_halvings: int | None = None) -> Spectrum:
+    """The response spectrum of ``record`` at ``periods`` [s] (see the module's text and ``Spectrum``).
 
-    ``scheme``: any nvib scheme (default Newmark, average acceleration). ``accuracy``: the relative
-    error of Sd to reach; the first step is min(record dt, T sqrt(12 accuracy) / (2 pi)) (the period
-    error of a second-order scheme is about (w dt)^2 / 12), halved for the periods that miss it, up to
-    ``max_halvings`` times. ``t_end``: default the record's end plus two of the longest periods (the
-    peak may come in the free vibration after it). ``law``: an effect in place of the linear spring
-    (its stiffness from the period) for an inelastic spectrum.
+    Elastic (no ``law``, no ``scheme``): exact, in closed form, for one damping ratio or several
+    (``damping=[0.02, 0.05]``: arrays of dampings x periods); ``accuracy`` and ``t_end`` do not apply.
 
-    Periods whose runs would not fit in memory (half the memory available, as for ``solve``) are refused
-    before any run, naming ``periods``; a halving that would not fit is not made (that period's ``error``
-    says what was reached). A run that fails raises an NvibError naming its period.
+    With ``scheme`` (any nvib scheme) or a nonlinear ``law`` (an effect in place of the linear spring,
+    its stiffness from the period) the SDOF of each period is integrated: ``accuracy`` (default 1e-3) is
+    the relative error to reach, checked against the exact peaks (a scheme on the linear SDOF: Sd and
+    absolute Sa, between samples) or by halving the step (a law, with Newmark unless ``scheme`` is
+    given); the first step is min(record dt, T sqrt(12 accuracy) / (2 pi)) (the period error of a
+    second-order scheme is about (w dt)^2 / 12), halved for the periods that miss it, up to
+    ``max_halvings`` times (default 4); ``threads`` as in ``solve_many``. ``t_end``: default the record's end plus two of the longest periods (the peak
+    may come in the free vibration after it). Periods whose runs would not fit in memory (half the memory
+    available, as for ``solve``) are refused before any run, naming ``periods``; a halving that would not
+    fit is not made (that period's ``error`` says what was reached). A run that fails raises an NvibError
+    naming its period.
     """
+    import time
+
     import nvib  # the schemes
 
     if not isinstance(record, GroundMotion):
@@ -151,14 +172,46 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
     periods = _checks.real_array("periods", periods)
     if periods.ndim != 1 or periods.size == 0 or np.any(~(periods > 0)) or not np.all(np.isfinite(periods)):
         raise _checks.value_error("periods", "expected a non-empty list of positive periods")
-    damping = _checks.real("damping", damping)
+    dampings = _checks.real_array("damping", damping)
+    if dampings.ndim > 1 or dampings.size == 0:
+        raise _checks.value_error("damping", "expected one damping ratio or a list of them")
+    if scheme is None and law is None:
+        for name, value in (("accuracy", accuracy), ("t_end", t_end), ("max_halvings", max_halvings),
+                            ("threads", threads)):
+            if value is not None:
+                raise _checks.value_error(name, "the elastic spectrum is exact (closed form, the free vibration after "
+                                                "the record followed as long as its peak can grow): "
+                                                f"{name} applies to runs with a scheme= or a law=")
+        start = time.perf_counter()
+        if record.dt is not None:
+            out = _core.elastic_spectrum(record.a, record.dt, periods, dampings if dampings.ndim else float(dampings),
+                                         t0=float(record.t[0]))
+        else:
+            out = _core.elastic_spectrum_at(record.t, record.a, periods,
+                                            dampings if dampings.ndim else float(dampings))
+        wall = time.perf_counter() - start
+        bad = ~np.isfinite(out["Sa"]) | ~np.isfinite(out["Sd"])
+        if np.any(bad):
+            T = np.broadcast_to(periods, bad.shape)[bad][0]
+            raise _checks.value_error("record", f"its response at T = {T:g} s is not finite: its values, up to "
+                                                f"{np.max(np.abs(record.a)):.3g}, are too large for doubles")
+        rdt = record.dt if record.dt is not None else float(np.min(np.diff(record.t)))
+        return Spectrum(periods, dampings if dampings.ndim else float(dampings), out["Sd"], out["PSv"], out["PSa"],
+                        out["Sa"], np.full(periods.size, rdt), None, wall, "exact", record.name, "", out["Sv"])
+    if dampings.ndim:  # runs: one spectrum per damping ratio, stacked
+        parts = [spectrum(record, periods, damping=float(z), scheme=scheme, law=law, accuracy=accuracy, t_end=t_end,
+                          threads=threads, max_halvings=max_halvings) for z in dampings]
+        stack = {k: np.vstack([getattr(p, k) for p in parts]) for k in ("Sd", "PSv", "PSa", "Sa", "dt", "error")}
+        return Spectrum(periods, dampings, stack["Sd"], stack["PSv"], stack["PSa"], stack["Sa"], stack["dt"],
+                        stack["error"], sum(p.wall_time for p in parts), parts[0].check, record.name, parts[0].scheme)
+    damping = float(dampings)
     if not 0.0 <= damping < 1.0:
-        raise _checks.value_error("damping", f"expected 0 <= damping < 1, got {damping}")
-    accuracy = _checks.real("accuracy", accuracy, positive=True)
+        raise _checks.value_error("damping", f"expected 0 <= damping < 1 for runs, got {damping}")
+    accuracy = _checks.real("accuracy", 1e-3 if accuracy is None else accuracy, positive=True)
     if accuracy < MIN_ACCURACY:
         raise _checks.value_error("accuracy", f"must be >= {MIN_ACCURACY:g} (below it the round-off of the millions "
                                               f"of steps it takes is as large as the error asked for), got {accuracy:g}")
-    max_halvings = _checks.integer("max_halvings", max_halvings, minimum=0)
+    max_halvings = _checks.integer("max_halvings", 4 if max_halvings is None else max_halvings, minimum=0)
     scheme = nvib.Newmark() if scheme is None else scheme
     given_t_end = t_end is not None
     t_end = float(record.t[-1] + 2.0 * periods.max()) if t_end is None else _checks.real("t_end", t_end, positive=True)
@@ -180,14 +233,16 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
             wall += sum(r[2] for r in runs)
             Sd[idx] = [r[0] for r in runs]
             Sa[idx] = [r[1] for r in runs]
-            if exact:  # the exact peaks at the same times, under the same samples of the record
-                ref, _ = exact_sdof_peaks(times, record(times), periods[idx], damping)
+            if exact:  # the exact peaks over the same span, between samples too, under the record as the runs saw it
+                ref = _core.elastic_spectrum_at(times, record(times), periods[idx], damping, free_vibration=False)
+                err[idx] = np.maximum(np.abs(Sd[idx] - ref["Sd"]) / np.maximum(ref["Sd"], 1e-300),
+                                      np.abs(Sa[idx] - ref["Sa"]) / np.maximum(ref["Sa"], 1e-300))
             else:
                 half, _ = _run(record, periods[idx], float(dt) / 2.0, damping, law, scheme, t_end, threads)
                 wall += sum(r[2] for r in half)
                 ref = np.array([r[0] for r in half])
+                err[idx] = np.abs(Sd[idx] - ref) / np.maximum(ref, 1e-300)
             del times
-            err[idx] = np.abs(Sd[idx] - ref) / np.maximum(ref, 1e-300)
         todo = todo[~(err[todo] <= accuracy)]  # a NaN error (an inf or NaN peak) misses the accuracy too
         if attempt == max_halvings:  # dt stays the step of the last runs, whose error err holds
             break
@@ -199,8 +254,8 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
             break
         dts[todo] /= 2.0
     w = 2.0 * math.pi / periods
-    return Spectrum(periods, damping, Sd, w * Sd, w * w * Sd, Sa, dts, err, wall, "exact" if exact else "half step",
-                    record.name, nvib.scheme_label(scheme))
+    return Spectrum(periods, damping, Sd, w * Sd, w * w * Sd, Sa, dts, err, wall,
+                    "exact check" if exact else "half step", record.name, nvib.scheme_label(scheme))
 
 
 def _memory_needed(group: int, steps: float, exact: bool) -> float:
