@@ -48,3 +48,49 @@ def test_ida_measures_and_arguments():
     with pytest.raises(nvib.ArgumentTypeError) as exc:
         nvib.ida(base, [[0.0, 1.0]], [1.0], dt=1e-3)
     assert exc.value.argument == "records[0]"
+
+
+def linear_two_storeys(signal):
+    """two_storeys with linear storeys (hardening a = 0): its response is proportional to the record."""
+    return nvib.Model([1e3, 1e3], dofs=["x1", "x2"], effects=[
+        {"type": "hardening_spring", "name": "storey1", "measure": {"x1": 1.0}, "k0": 4e5, "a": 0.0},
+        {"type": "hardening_spring", "name": "storey2", "measure": {"x2": 1.0, "x1": -1.0}, "k0": 3e5, "a": 0.0},
+        {"type": "damper", "name": "d1", "measure": {"x1": 1.0}, "c": 500.0},
+        {"type": "ground_acceleration", "name": "ground", "signal": signal}])
+
+
+def test_records_are_scaled_to_each_level_of_sa_t1():
+    """im='sa': each record is scaled so that its exact Sa(T1) equals the level (Vamvatsikos & Cornell 2002)."""
+    records = motions()
+    levels = [0.5, 1.0, 2.0]
+    res = nvib.ida(two_storeys(records[0]), records, levels, im="sa", period=0.5, dt=1e-3, progress=False)
+    assert res.im_name == "Sa(T1 = 0.5 s, 5 %)" and res.factors.shape == (2, 3)
+    for i, r in enumerate(records):
+        for j, level in enumerate(levels):
+            sa = nvib._core.elastic_spectrum(r.a * res.factors[i, j], r.dt, [0.5], 0.05)["PSa"][0]
+            assert sa == pytest.approx(level, rel=1e-12)
+    assert "Sa(T1 = 0.5 s, 5 %)" in res.markdown().splitlines()[0]
+
+
+def test_a_linear_models_ida_curve_is_a_straight_line_through_the_origin():
+    """Drift of a linear model is proportional to the record's scale, so to Sa(T1): drift / Sa is the same
+    at every level of a record (a straight line through the origin), to round-off."""
+    records = motions()
+    levels = [0.1, 0.4, 1.6, 6.4]
+    res = nvib.ida(linear_two_storeys(records[0]), records, levels, im="sa", period=0.3,
+                   scheme=nvib.Newmark(), dt=2e-3, progress=False)
+    slope = res.measure / np.asarray(levels)[None, :]
+    np.testing.assert_allclose(slope, slope[:, :1] * np.ones_like(slope), rtol=1e-9)
+    assert not np.allclose(slope[0, 0], slope[1, 0], rtol=1e-3)  # each record its own line
+
+
+def test_intensity_measures_and_their_arguments():
+    r = motions()[0]
+    assert nvib.analysis.ida.intensity(r, "pga") == np.max(np.abs(r.a))
+    assert nvib.analysis.ida.intensity(r, lambda g: 2.0) == 2.0
+    for kw, arg in ((dict(im="sa"), "period"), (dict(im="sA", period=1.0), "im"), (dict(im=lambda g: -1.0), "im")):
+        with pytest.raises(nvib.ArgumentError) as exc:
+            nvib.analysis.ida.intensity(r, **kw)
+        assert exc.value.argument == arg
+    res = nvib.ida(two_storeys(r), [r], [0.5, 1.0], im="pga", dt=1e-3, progress=False)
+    np.testing.assert_allclose(res.factors[0] * np.max(np.abs(r.a)), [0.5, 1.0], rtol=1e-15)

@@ -9,20 +9,23 @@ import dataclasses
 
 import numpy as np
 
-from .. import _checks
+from .. import _checks, _core
 from .._batch import RunError, solve_many
 from .._labels import scheme_label
 from .._model import Model
 from .._records import GroundMotion
 
-__all__ = ["IDA", "ida"]
+__all__ = ["IDA", "ida", "intensity"]
 
 
 @dataclasses.dataclass
 class IDA:
     """``measure`` [record, scale] (inf where the run collapsed), ``collapsed`` (bool, same shape),
-    ``records`` (names), ``scales``, the name of the measure, and per scale the ``median``, ``p16`` and
-    ``p84`` of the measure over the records (collapses count as infinite). ``messages``: why a run failed."""
+    ``records`` (names), ``scales`` (the intensity levels: the records' scale factors, or with an intensity
+    measure its values), the name of the measure, and per level the ``median``, ``p16`` and ``p84`` of the
+    measure over the records (collapses count as infinite). ``messages``: why a run failed. With an
+    intensity measure, ``im_name`` names it (e.g. "Sa(T1 = 0.8 s, 5 %)") with its ``im_unit``, and
+    ``factors`` [record, level] are the scale factors that brought each record to each level."""
 
     records: list
     scales: np.ndarray
@@ -31,6 +34,9 @@ class IDA:
     collapsed: np.ndarray
     messages: dict
     scheme: str
+    im_name: str = "scale factor"
+    im_unit: str = "-"
+    factors: np.ndarray | None = None
 
     def fractile(self, q: float) -> np.ndarray:
         """The q-th percentile (0-100) of the measure over the records at each scale, interpolated
@@ -53,7 +59,8 @@ class IDA:
 
     def markdown(self) -> str:
         """The table: one row per scale, one column per record, then the fractiles."""
-        head = "| scale | " + " | ".join(self.records) + " | median | 16 % | 84 % |"
+        level = "scale" if self.factors is None else f"{self.im_name} [{self.im_unit or 'record units'}]"
+        head = f"| {level} | " + " | ".join(self.records) + " | median | 16 % | 84 % |"
         rows = [head, "|---:|" + "---:|" * (len(self.records) + 3)]
         fmt = lambda x: "collapse" if not np.isfinite(x) else f"{x:.4g}"  # noqa: E731
         for j, s in enumerate(self.scales):
@@ -88,7 +95,8 @@ class IDA:
             ax.plot(values[ok], self.scales[ok], style, lw=2, label=label)
         unit = f" [{units}]" if units else ""
         ax.set_xlabel(f"{self.measure_name}{unit}  (x at right: collapse)")
-        ax.set_ylabel("scale factor of the record [-]")
+        ax.set_ylabel("scale factor of the record [-]" if self.factors is None else
+                      f"{self.im_name} [{self.im_unit or 'record units'}]")
         ax.set_title(f"IDA, {self.scheme}")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="lower right")
@@ -134,13 +142,51 @@ def _check_measure(model, measure) -> None:
                                          f"got {measure!r}")
 
 
+def intensity(record: GroundMotion, im="sa", *, period: float | None = None, damping: float = 0.05) -> float:
+    """The intensity measure of ``record``: "sa" (the exact pseudo-spectral acceleration Sa(T1, damping)
+    at ``period``, nvib._core.elastic_spectrum), "pga" (the peak |a_g|), or a callable f(record) -> float."""
+    if not isinstance(record, GroundMotion):
+        raise _checks.type_error("record", f"expected a GroundMotion, got {type(record).__name__}")
+    if callable(im):
+        value = im(record)
+        if not isinstance(value, (int, float, np.floating)) or not np.isfinite(value) or value <= 0:
+            raise _checks.value_error("im", f"the intensity measure gave {value!r} for {record.name or 'a record'}: "
+                                            "expected a finite positive number")
+        return float(value)
+    if im == "pga":
+        return float(np.max(np.abs(record.a)))
+    if im != "sa":
+        raise _checks.value_error("im", f"expected 'sa', 'pga' or a callable f(record) -> float, got {im!r}"
+                                        f"{_checks.suggestion(str(im), ['sa', 'pga'])}")
+    if period is None:
+        raise _checks.value_error("period", "im='sa' needs the period T1 of Sa(T1) [s]")
+    period = _checks.real("period", period, positive=True)
+    if record.dt is not None:
+        out = _core.elastic_spectrum(record.a, record.dt, [period], damping, t0=float(record.t[0]))
+    else:
+        out = _core.elastic_spectrum_at(record.t, record.a, [period], damping)
+    return float(out["PSa"][0])
+
+
+def _im_label(im, period, damping) -> str:
+    if callable(im):
+        return getattr(im, "__name__", "intensity")
+    return "PGA" if im == "pga" else f"Sa(T1 = {period:g} s, {100 * damping:g} %)"
+
+
 def ida(model, records, scales, *, scheme=None, dt: float, t_end: float | None = None, measure: str = "peak_drift",
-        threads: int | None = None, progress: bool = True) -> IDA:
-    """Run ``model`` under every record of ``records`` (GroundMotions) at every factor of ``scales``
+        im=None, period: float | None = None, damping: float = 0.05, threads: int | None = None,
+        progress: bool = True) -> IDA:
+    """Run ``model`` under every record of ``records`` (GroundMotions) at every level of ``scales``
     and reduce each run to ``measure``: "peak_drift" (the largest peak of the named effects'
-    measures: storey drifts), "peak_u" (the largest peak |u|) or the name of one effect. ``t_end``:
-    default the end of the longest record (a shorter one is followed by free vibration). A diverging
-    run is a collapse (infinite measure); ``IDA.messages`` keeps why."""
+    measures: storey drifts), "peak_u" (the largest peak |u|) or the name of one effect.
+
+    Without ``im`` the levels are scale factors of the records. With ``im`` they are values of an
+    intensity measure, and each record is scaled to each of them (Vamvatsikos & Cornell 2002): "sa",
+    the exact pseudo-spectral acceleration Sa(``period``, ``damping``) of the record (``period``: the
+    structure's T1 [s]), "pga", or a callable f(record) -> float. ``t_end``: default the end of the
+    longest record (a shorter one is followed by free vibration). A diverging run is a collapse
+    (infinite measure); ``IDA.messages`` keeps why."""
     import nvib
 
     records = list(records)
@@ -153,8 +199,18 @@ def ida(model, records, scales, *, scheme=None, dt: float, t_end: float | None =
     _check_measure(model, measure)
     scheme = nvib.CEMDTS() if scheme is None else scheme
     t_end = max(float(r.t[-1]) for r in records) if t_end is None else _checks.real("t_end", t_end, positive=True)
-    batch = solve_many(model, scheme, dt=dt, t_end=t_end, ground_motions=records, scales=list(scales),
-                       keep="peaks", threads=threads, progress=progress)
+    damping = _checks.real("damping", damping)
+    period = None if period is None else _checks.real("period", period, positive=True)
+    factors = None
+    if im is not None:  # each record scaled to each level of the intensity measure
+        own = np.array([intensity(r, im, period=period, damping=damping) for r in records])
+        factors = scales[None, :] / own[:, None]
+        motions = [r.scaled(float(f)) for r, row in zip(records, factors) for f in row]
+        batch = solve_many(model, scheme, dt=dt, t_end=t_end, ground_motions=motions, keep="peaks",
+                           threads=threads, progress=progress)
+    else:
+        batch = solve_many(model, scheme, dt=dt, t_end=t_end, ground_motions=records, scales=list(scales),
+                           keep="peaks", threads=threads, progress=progress)
     values = np.full((len(records), scales.size), np.inf)
     collapsed = np.zeros_like(values, dtype=bool)
     messages = {}
@@ -168,4 +224,9 @@ def ida(model, records, scales, *, scheme=None, dt: float, t_end: float | None =
             collapsed[i, j] = True
             messages[(i, j)] = run.message
     names = [r.name or f"record {k}" for k, r in enumerate(records)]
-    return IDA(names, scales, measure, values, collapsed, messages, scheme_label(scheme))
+    if factors is None:
+        return IDA(names, scales, measure, values, collapsed, messages, scheme_label(scheme))
+    units = {r.units for r in records}
+    unit = units.pop() if len(units) == 1 else ""
+    return IDA(names, scales, measure, values, collapsed, messages, scheme_label(scheme),
+               _im_label(im, period, damping), unit, factors)
