@@ -23,7 +23,7 @@ from .. import _checks, _core
 from .._batch import RunError, solve_many
 from .._errors import NvibError, error_for
 from .._model import Model
-from .._records import GroundMotion
+from .._records import STANDARD_GRAVITY, GroundMotion
 
 __all__ = ["Spectrum", "spectrum", "exact_sdof_peaks", "rotd_spectrum"]
 
@@ -39,7 +39,9 @@ class Spectrum:
     """Spectral values per period: ``periods`` [s], ``damping``, ``Sd`` (peak relative displacement),
     ``PSv`` = w Sd, ``PSa`` = w^2 Sd, ``Sa`` (peak absolute acceleration), and per period the step
     ``dt`` used, the relative ``error`` of Sd against the check (the exact solution for an elastic
-    spectrum), the ``wall_time`` of the runs, and ``check`` ("exact" or "half step")."""
+    spectrum), the ``wall_time`` of the runs, and ``check`` ("exact" or "half step"). ``units``: the
+    record's ("g", "m/s^2" or "" when not known): PSa and Sa are in it, Sd in it times s^2 (m for
+    m/s^2), PSv in it times s; ``in_units("g")`` converts."""
 
     periods: np.ndarray
     damping: float
@@ -53,6 +55,36 @@ class Spectrum:
     check: str
     record: str = ""
     scheme: str = ""
+    units: str = ""
+
+    def in_units(self, units: str) -> Spectrum:
+        """The same spectrum with its accelerations in ``units`` ("g" or "m/s^2"; Sd, PSv follow: g s^2 or m).
+        Refused, naming ``units``, when the spectrum's own unit is not known."""
+        factor = unit_factor(self.units, units)
+        return dataclasses.replace(self, Sd=self.Sd * factor, PSv=self.PSv * factor, PSa=self.PSa * factor,
+                                   Sa=self.Sa * factor, units=units)
+
+
+ACCELERATION_UNITS = {"g": STANDARD_GRAVITY, "m/s^2": 1.0}  # in m/s^2
+
+
+def unit_factor(have: str, want: str) -> float:
+    """The factor turning accelerations in ``have`` into ``want`` (both "g" or "m/s^2")."""
+    if want not in ACCELERATION_UNITS:
+        raise _checks.value_error("units", f"expected one of {', '.join(ACCELERATION_UNITS)}, got {want!r}")
+    if have not in ACCELERATION_UNITS:
+        raise _checks.value_error("units", f"the record's unit is not known{f' ({have!r})' if have else ''}, so its "
+                                           f"values cannot be given in {want}")
+    return ACCELERATION_UNITS[have] / ACCELERATION_UNITS[want]
+
+
+def unit_labels(units: str) -> dict:
+    """The units of Sd, PSv and PSa for accelerations in ``units``: m and m/s for m/s^2."""
+    if units == "m/s^2":
+        return {"Sd": "m", "PSv": "m/s", "PSa": "m/s^2"}
+    if units:
+        return {"Sd": f"{units} s^2", "PSv": f"{units} s", "PSa": units}
+    return {"Sd": "record units s^2", "PSv": "record units s", "PSa": "record units"}
 
 
 def _exact_step(u, v, a0, a1, w, z, h):
@@ -200,7 +232,7 @@ def spectrum(record: GroundMotion, periods, *, damping: float = 0.05, scheme=Non
         dts[todo] /= 2.0
     w = 2.0 * math.pi / periods
     return Spectrum(periods, damping, Sd, w * Sd, w * w * Sd, Sa, dts, err, wall, "exact" if exact else "half step",
-                    record.name, nvib.scheme_label(scheme))
+                    record.name, nvib.scheme_label(scheme), record.units)
 
 
 def _memory_needed(group: int, steps: float, exact: bool) -> float:
