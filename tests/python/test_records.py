@@ -393,3 +393,94 @@ def test_shipped_record_is_what_its_generator_makes():
     assert run.returncode == 0, run.stdout + run.stderr
     gm = nvib.GroundMotion.from_at2(record)
     assert len(gm.t) == 3001 and gm.dt == pytest.approx(0.01) and gm.pga == pytest.approx(0.40, rel=1e-6)
+
+
+# ---- a scene under another record: load_scene(ground_motion=) and nvib run --record ----------------
+
+def northridge_like(tmp_path, scale=1.0):
+    """A PEER-like file with CR CR LF line ends: a decaying 2 Hz pulse train in g, 0.01 s apart."""
+    t = np.arange(0, 3.0, 0.01)
+    a = scale * 0.3 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-t)
+    header = ["PEER NGA STRONG MOTION DATABASE RECORD", "Northridge-01, 1/17/1994, Sylmar - Olive View Med FF, 360",
+              "ACCELERATION TIME SERIES IN UNITS OF G", f"NPTS=  {t.size}, DT=   .0100 SEC,"]
+    return write_bytes(tmp_path / "RSN1086_NORTHR_SYL360.AT2", header + peer_written(list(a)), "\r\r\n")
+
+
+def test_load_scene_under_another_record(tmp_path):
+    """The record replaces the scene's ground motion, in m/s^2 (a record in g is converted); a scene without
+    one is refused naming ground_motion."""
+    gm = GroundMotion.from_at2(northridge_like(tmp_path))
+    model = nvib.load_scene("building_inelastic", ground_motion=gm)
+    si = nvib.load_scene("building_inelastic", ground_motion=gm.scaled(nvib.STANDARD_GRAVITY))
+    a = nvib.solve(model, nvib.Newmark(), dt=0.005, t_end=1.0)
+    b = nvib.solve(si, nvib.Newmark(), dt=0.005, t_end=1.0)
+    own = nvib.solve(nvib.load_scene("building_inelastic"), nvib.Newmark(), dt=0.005, t_end=1.0)
+    np.testing.assert_array_equal(a.u, b.u)
+    assert not np.array_equal(a.u, own.u) and np.max(np.abs(a.u)) > 0
+    for scene, without, match in (("pendulum", (), r"no ground_acceleration effect\)"),
+                                  ("building", ("ground",), "left out by without")):
+        with pytest.raises(nvib.ArgumentError, match=match) as exc:
+            nvib.load_scene(scene, ground_motion=gm, without=without)
+        assert exc.value.argument == "ground_motion"
+    with pytest.raises(TypeError, match="expected a GroundMotion"):
+        nvib.load_scene("building", ground_motion=[0.0, 1.0])
+
+
+def test_run_under_a_record_scaled_to_sa(tmp_path, capsys):
+    from _cli import run_cli
+
+    path = northridge_like(tmp_path)
+    gm = GroundMotion.from_at2(path)
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--record", path, "--sa", "0.9", "0.5", "--t-end",
+                             "1", "--scheme", "newmark", "--out", tmp_path / "r.npz")
+    assert code == 0, err
+    scaled, factor = gm.scaled_to_sa(0.9, 0.5)
+    line = next(ln for ln in out.splitlines() if ln.startswith("record"))
+    assert "RSN1086, Northridge-01, Sylmar - Olive View Med FF, 360" in line
+    assert f"scaled by {factor:.6g} to Sa(T1 = 0.9 s, 5 %) = 0.5 g (was {gm.psa(0.9):.4g} g)" in line
+    assert "lasts until t = 2.99 s, the run ends at 1 s" in err
+    res = nvib.load_result(tmp_path / "r.npz")
+    want = nvib.solve(nvib.load_scene("building_inelastic", ground_motion=scaled), nvib.Newmark(), dt=0.002,
+                      t_end=1.0)
+    np.testing.assert_allclose(res.u, want.u, rtol=0, atol=1e-12 * np.max(np.abs(want.u)))
+
+    code, out, err = run_cli(capsys, "run", "isolated", "--record", path, "--scale", "2", "--t-end", "0.2")
+    assert code == 0, err
+    assert f"scaled by 2: PGA {2 * gm.pga:.4g} g" in out
+    assert run_cli(capsys, "run", "building", "--record", path, "--sa", "1", "0.2", "--sa-damping", "0.02",
+                   "--t-end", "0.1")[0] == 0
+
+    one = write(tmp_path / "one.txt", "\n".join(repr(float(x)) for x in gm.a * 9.80665))
+    code, out, err = run_cli(capsys, "run", "building", "--record", one, "--record-dt", "0.01", "--record-units",
+                             "m/s^2", "--t-end", "0.1")
+    assert code == 0 and "PGA" in out and "m/s^2" in out
+
+
+@pytest.mark.parametrize("argv, argument, needle", [
+    (["pendulum", "--record", "{rec}"], "--record", "scene 'pendulum' has no ground motion to replace"),
+    (["building", "--record", "{rec}", "--scale", "2", "--sa", "1", "0.3"], "--sa", "not allowed with argument --scale"),
+    (["building", "--scale", "2"], "--scale", "give --record FILE too"),
+    (["building", "--record", "{bad}"], "--record", "bad.AT2, line 6: 'x.1E-02' is not a number"),
+    (["building", "--record", "{missing}"], "--record", "no such file"),
+    (["building", "--record", "{one}", "--record-dt", "0.01"], "--record-units", "is not known"),
+    (["building", "--record", "{one}"], "--record-dt", "give their time step"),
+    (["building", "--record", "{rec}", "--sa", "1", "0"], "--sa", "must be > 0"),
+    (["building", "--record", "{rec}", "--sa", "1", "nan"], "--sa", "must be finite"),
+    (["building", "--record", "{rec}", "--sa", "1", "0.3", "--sa-damping", "1.5"], "--sa-damping", "expected 0 <="),
+    (["building", "--record", "{zero}", "--sa", "1", "0.3"], "--sa", "PSa at T = 1 s is 0"),
+])
+def test_run_record_bad_input(tmp_path, argv, argument, needle):
+    """Bad input exits 2 with one line naming the option, no traceback."""
+    from _cli import nvib_subprocess
+    from test_cli_bad_input import assert_bad_input
+
+    header = ["PEER NGA STRONG MOTION DATABASE RECORD", "Northridge-01, 1/17/1994, Sylmar, 360",
+              "ACCELERATION TIME SERIES IN UNITS OF G", "NPTS=  7, DT=   .0100 SEC,"]
+    bad = peer_written(NORTHRIDGE)
+    bad[1] = bad[1][:15] + "  x.1E-02"
+    files = {"rec": northridge_like(tmp_path), "bad": write_bytes(tmp_path / "bad.AT2", header + bad, "\r\r\n"),
+             "missing": str(tmp_path / "missing.AT2"), "one": write(tmp_path / "one.txt", "0\n0.1\n-0.1\n"),
+             "zero": write_bytes(tmp_path / "zero.AT2", header + peer_written([0.0] * 7), "\n")}
+    p = nvib_subprocess("run", *[a.format(**files) for a in argv], "--t-end", "0.1", timeout=60)
+    last = assert_bad_input(p, "run", argument)
+    assert needle in last, last
