@@ -11,7 +11,7 @@ import numpy as np
 from . import _checks
 from ._core import ArgumentError
 from ._model import Model, _units
-from ._records import GroundMotion
+from ._records import STANDARD_GRAVITY, GroundMotion
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -55,8 +55,11 @@ def scene_path(name_or_path: str) -> str:
                                        "scene file is named by a path such as ./my_scene.toml)")
 
 
-def load_scene(name_or_path: str, *, without=()) -> Model:
-    """Build the Model a scene declares; ``without`` leaves out effects by name or type.
+def load_scene(name_or_path: str, *, without=(), ground_motion: GroundMotion | None = None) -> Model:
+    """Build the Model a scene declares; ``without`` leaves out effects by name or type; ``ground_motion``
+    (a GroundMotion) replaces the signal of the scene's ground_acceleration effects (a record in g is
+    turned into m/s^2, the built-in scenes' unit; refused, naming ``ground_motion``, for a scene
+    without ground motion).
 
     The returned model carries the scene's settings in ``model.scene`` (name,
     title, source, dt, t_end, plot_dof, path, initial_u, notes). A scene that
@@ -67,8 +70,13 @@ def load_scene(name_or_path: str, *, without=()) -> Model:
     path = scene_path(str(name_or_path))
     data = _read_toml(path)
     without = (without,) if isinstance(without, str) else tuple(without)
+    if ground_motion is not None:
+        if not isinstance(ground_motion, GroundMotion):
+            raise _checks.type_error("ground_motion", f"expected a GroundMotion, got {type(ground_motion).__name__}")
+        if ground_motion.units == "g":
+            ground_motion = ground_motion.scaled(STANDARD_GRAVITY)
     if not without:
-        return scene_from_dict(data, path=path)
+        return scene_from_dict(data, path=path, ground_motion=ground_motion)
     full = scene_from_dict(data, path=path)
     names = sorted({e.name for e in full.effects if e.name})
     types = sorted({e.type for e in full.effects})
@@ -78,14 +86,14 @@ def load_scene(name_or_path: str, *, without=()) -> Model:
                                                  f"(names: {', '.join(names) or '-'}; types: {', '.join(types) or '-'})")
     notes = []
     try:
-        model = scene_from_dict(data, path=path, without=without)
+        model = scene_from_dict(data, path=path, without=without, ground_motion=ground_motion)
     except SceneError as exc:
         if exc.key != "initial":
             raise
         # Without e.g. the wheel-rail contact a vehicle has no equilibrium to rest in:
         # start from the full scene's equilibrium instead (same initial state, fewer forces).
         data = dict(data, initial=dict(data.get("initial", {}), u=[float(x) for x in full.u0]))
-        model = scene_from_dict(data, path=path, without=without)
+        model = scene_from_dict(data, path=path, without=without, ground_motion=ground_motion)
         model.scene["initial_u"] = "static equilibrium of the full scene"
         notes.append(f"without {', '.join(without)} the model has no static equilibrium; "
                      f"starting from that of the full scene")
@@ -183,7 +191,21 @@ def _require(path: str, table: dict, key: str, where: str):
     return table[key]
 
 
-def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
+def _with_ground_motion(path: str, effects: list, ground_motion: GroundMotion, without, scene: str) -> list:
+    """The effects with every ground_acceleration that is not left out driven by ``ground_motion``."""
+    def driven(e):
+        return (isinstance(e, dict) and e.get("type") == "ground_acceleration"
+                and e.get("name") not in without and e.get("type") not in without)
+
+    if not any(driven(e) for e in effects):
+        left_out = any(isinstance(e, dict) and e.get("type") == "ground_acceleration" for e in effects)
+        raise _checks.value_error("ground_motion", f"scene {scene!r} has no ground motion to replace (no "
+                                                   "ground_acceleration effect" + (" left: it is left out by "
+                                                   "without)" if left_out else ")"))
+    return [{**e, "signal": ground_motion} if driven(e) else e for e in effects]
+
+
+def scene_from_dict(data: dict, *, path: str = "<scene>", without=(), ground_motion: GroundMotion | None = None) -> Model:
     for key in data:
         if key not in _TOP_KEYS:
             raise SceneError(f"{path}: {key}: unknown table (expected {', '.join(sorted(_TOP_KEYS))})")
@@ -213,6 +235,9 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=()) -> Model:
     effects = data.get("effect", [])
     if not isinstance(effects, list):
         raise SceneError(f"{path}: effect: expected [[effect]] tables")
+    if ground_motion is not None:  # before the records are read: the scene's own is not needed then
+        effects = _with_ground_motion(path, effects, ground_motion, tuple(without),
+                                      meta.get("name", os.path.basename(path)[:-5]))
     effects = [_with_records(path, i, e) for i, e in enumerate(effects)]
 
     initial = data.get("initial", {})

@@ -3,7 +3,8 @@
 ``plot_run(result, model, dof, path)`` draws the displacement histories, the
 phase locus of one DOF (or of an effect's measure) and, when the run recorded
 energy, the energy terms, every axis with its unit; ``run_figure`` returns
-the same figure instead of writing it.
+the same figure instead of writing it. ``plot_spectrum(spectra, path, units="g")`` draws response
+spectra (pseudo and absolute Sa, Sd) with the accelerations in g or m/s^2.
 The figures are drawn on their own Agg canvas: no pyplot state is touched,
 so this works the same in scripts, servers and notebooks.
 """
@@ -317,3 +318,42 @@ def tidy_ticks(ax) -> None:
             fmt = ScalarFormatter(useMathText=True)
             fmt.set_powerlimits((-3, 4))
             axis.set_major_formatter(fmt)
+
+
+def spectrum_figure(spectra, *, units: str | None = None, title: str | None = None):
+    """Response spectra (one ``Spectrum`` or a list, e.g. one per damping): PSa and the absolute Sa, and Sd,
+    against the period on log axes. ``units``: "g" or "m/s^2" for the accelerations (Sd then in m when the
+    record's unit is known); default the record's own."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from .analysis.spectrum import unit_labels
+
+    spectra = [spectra] if not isinstance(spectra, (list, tuple)) else list(spectra)
+    spectra = [row for sp in spectra for row in sp.by_damping()]  # one curve per damping ratio
+    if not spectra:
+        raise _checks.value_error("spectra", "expected at least one spectrum")
+    shown = [sp.in_units(units) if units is not None else sp for sp in spectra]
+    # Sd in metres whenever the unit is known (a displacement in g s^2 means little to a reader)
+    sd = [sp.in_units("m/s^2") if sp.units in ("g", "m/s^2") else sp for sp in spectra]
+    labels = unit_labels(shown[0].units)
+    fig = Figure(figsize=(12, 4.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax1, ax2 = fig.subplots(1, 2)
+    for sp, d in zip(shown, sd):
+        line, = ax1.loglog(sp.periods, sp.PSa, label=f"PSa, ζ = {sp.damping:g}")
+        ax1.loglog(sp.periods, sp.Sa, ":", color=line.get_color(), label=f"Sa (absolute), ζ = {sp.damping:g}")
+        ax2.loglog(d.periods, d.Sd, color=line.get_color(), label=f"Sd, ζ = {sp.damping:g}")
+    ax1.set_ylabel(f"spectral acceleration [{labels['PSa']}]")
+    ax2.set_ylabel(f"spectral displacement [{unit_labels(sd[0].units)['Sd']}]")
+    for ax in (ax1, ax2):
+        ax.set_xlabel("period T [s]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title if title is not None else f"{spectra[0].record}: {spectra[0].scheme}")
+    return fig
+
+
+def plot_spectrum(spectra, path, *, units: str | None = None, title: str | None = None, dpi: int = 120) -> None:
+    """Write ``spectrum_figure(spectra, units=units, title=title)`` to ``path`` (.png, .svg, .pdf)."""
+    spectrum_figure(spectra, units=units, title=title).savefig(path, dpi=dpi)

@@ -89,6 +89,8 @@ def calls(files) -> dict:
         "GroundMotion.from_spec": (GroundMotion.from_spec, ("signal", {"kind": "record", "file": files["rec"],
                                                                        "dt": 0.01}), {}),
         "GroundMotion.signal": (record.signal, (), {}),
+        "GroundMotion.psa": (record.psa, ([0.5, 1.0],), {}),
+        "GroundMotion.scaled_to_sa": (record.scaled_to_sa, (0.5, 0.3), {}),
         "Model": (nvib.Model, ([1.0],), {}),
         "Model.evaluate_force": (osc.evaluate_force, ([0.1], [0.0]), {}),
         "Model.static_equilibrium": (osc.static_equilibrium, (), {}),

@@ -46,7 +46,8 @@ def test_at2_both_header_styles(tmp_path, header):
 def test_at2_scale_to_si(tmp_path):
     gm = GroundMotion.from_at2(at2(tmp_path), scale=nvib.STANDARD_GRAVITY)
     np.testing.assert_array_equal(gm.a, np.array(VALUES) * 9.80665)
-    assert gm.units == ""  # scaled: no longer in g
+    assert gm.units == "m/s^2"  # g times the standard gravity
+    assert GroundMotion.from_at2(at2(tmp_path), scale=0.5).units == "g"  # an intensity level: still in g
     assert GroundMotion.from_file(at2(tmp_path)) == GroundMotion.from_at2(at2(tmp_path))  # by its extension
 
 
@@ -57,7 +58,8 @@ def test_at2_errors_name_file_and_line(tmp_path):
     assert exc.value.line == 4 and exc.value.path == path
 
     path = at2(tmp_path, header="NPTS=    {n}, DT=   .0100 SEC".replace("{n}", "9"), name="short.AT2")
-    with pytest.raises(RecordError, match=r"short.AT2, line 4: NPTS = 9, but 7 values follow the header"):
+    with pytest.raises(RecordError, match=r"short.AT2, line 4: the header says NPTS = 9, but 7 values follow it "
+                                          r"\(lines 5 to 6\)"):
         GroundMotion.from_at2(path)
 
     path = at2(tmp_path, name="bad.AT2")
@@ -74,6 +76,132 @@ def test_at2_errors_name_file_and_line(tmp_path):
     path = at2(tmp_path, header="NPTS=    {n}, DT=   0.0 SEC", name="zerodt.AT2")
     with pytest.raises(RecordError, match=r"line 4: DT = 0.0 must be > 0"):
         GroundMotion.from_at2(path)
+
+
+# Records as they are found in the wild: the header forms PEER has used, line ends changed by copies
+# between systems, Fortran exponents and fixed columns.
+NORTHRIDGE = [0.0, -0.1826520e-3, 0.2241389e-2, -0.1234567e-1, 0.8437e-1, -0.5678901e-3, 0.0]
+
+
+def columns(values, fmt="{:15.7E}", per_line=5):
+    return ["".join(fmt.format(v) for v in values[k:k + per_line]) for k in range(0, len(values), per_line)]
+
+
+def peer_written(values, per_line=5):
+    """Values as PEER writes them, E15.7 without a leading zero: '  -.1826520E-03'."""
+    def one(v):
+        text = f"{v:.6E}"  # -1.826520E-04 -> -.1826520E-03
+        sign = "-" if text.startswith("-") else ""
+        mantissa, exp = text.lstrip("-").split("E")
+        return f"{sign}.{mantissa.replace('.', '')}E{int(exp) + 1:+03d}".rjust(15) if v else "   .0000000E+00"
+    return ["".join(one(v) for v in values[k:k + per_line]) for k in range(0, len(values), per_line)]
+
+
+def write_bytes(path, lines, end):
+    with open(path, "wb") as fh:
+        fh.write(end.join(lines).encode() + end.encode())
+    return str(path)
+
+
+def test_northridge_with_cr_cr_lf_line_ends_is_read(tmp_path):
+    """A PEER/OpenSees Northridge file copied through a text-mode transfer ends its lines with CR CR LF. It
+    used to be refused, the error blaming a header line; every line end now counts as one."""
+    header = ["PEER NGA STRONG MOTION DATABASE RECORD",
+              "Northridge-01, 1/17/1994, Sylmar - Olive View Med FF, 360",
+              "ACCELERATION TIME SERIES IN UNITS OF G",
+              f"NPTS=  {len(NORTHRIDGE)}, DT=   .0200 SEC,"]
+    for end in ("\r\r\n", "\r\n", "\n", "\r"):
+        path = write_bytes(tmp_path / "RSN1086_NORTHR_SYL360.AT2", header + peer_written(NORTHRIDGE) + ["", ""], end)
+        gm = GroundMotion.from_at2(path)
+        np.testing.assert_allclose(gm.a, NORTHRIDGE, rtol=1e-15, atol=0)
+        assert gm.dt == pytest.approx(0.02, rel=1e-12) and len(gm) == len(NORTHRIDGE) and gm.units == "g"
+        assert (gm.event, gm.date, gm.station, gm.component, gm.rsn) == (
+            "Northridge-01", "1/17/1994", "Sylmar - Olive View Med FF", "360", 1086)
+        assert gm.label == "RSN1086, Northridge-01, Sylmar - Olive View Med FF, 360"
+        assert gm.name == "RSN1086_NORTHR_SYL360.AT2" and "Sylmar" in repr(gm)
+    # a bad sample is blamed on its own line, counted as an editor counts them, never on the header
+    bad = peer_written(NORTHRIDGE)
+    bad[1] = bad[1][:15] + "  x.1E-02"
+    path = write_bytes(tmp_path / "bad.AT2", header + bad, "\r\r\n")
+    with pytest.raises(RecordError, match=r"bad.AT2, line 6: 'x.1E-02' is not a number"):
+        GroundMotion.from_at2(path)
+
+
+@pytest.mark.parametrize("line4", ["NPTS=  7, DT= .0100 SEC", "NPTS=7,DT=.01", "npts = 7 , dt = 0.0100 sec",
+                                   "NPTS=     7, DT=   .0100 SEC,", "   7   .0100   NPTS, DT",
+                                   "7 0.01 NPTS, DT, SEC", "DT= .0100 SEC, NPTS= 7"])
+def test_old_and_new_peer_headers(tmp_path, line4):
+    path = write_bytes(tmp_path / "h.AT2", ["PEER STRONG MOTION DATABASE RECORD. PROCESSING BY PACIFIC ENGINEERING.",
+                                            "NORTHRIDGE EQ 01/17/94, 1231, SYLMAR COUNTY HOSP PARKING LOT, 360",
+                                            "ACCELERATION TIME HISTORY IN UNITS OF G", line4]
+                       + columns(NORTHRIDGE, "{:15.5E}"), "\n")
+    gm = GroundMotion.from_at2(path)
+    np.testing.assert_allclose(gm.a, NORTHRIDGE, rtol=1e-5)
+    assert gm.dt == pytest.approx(0.01, rel=1e-12) and gm.units == "g"
+    assert (gm.event, gm.date, gm.station, gm.component, gm.rsn) == (
+        "NORTHRIDGE EQ", "01/17/94", "SYLMAR COUNTY HOSP PARKING LOT", "360", None)
+    assert gm.label == "NORTHRIDGE EQ, SYLMAR COUNTY HOSP PARKING LOT, 360"
+
+
+def test_fortran_numbers_and_fixed_columns(tmp_path):
+    """D exponents, mantissas without a leading digit, and values that fill their fixed-width column so no
+    blank separates them from the next one."""
+    lines = ["PEER NGA STRONG MOTION DATABASE RECORD", "Kobe, Japan, 1/16/1995, KJMA, 000",
+             "ACCELERATION TIME SERIES IN UNITS OF G", "NPTS=  7, DT=   .0050 SEC,",
+             "0.0D+00 -.1826520E-03 .2241389D-02",
+             "-0.1234567E-01-0.8437000E-01+0.5678901E-03",  # run together: E15.7 with a leading zero fills it
+             "0.0", "   ", ""]
+    gm = GroundMotion.from_at2(write_bytes(tmp_path / "kobe.AT2", lines, "\r\n"))
+    np.testing.assert_allclose(gm.a, [0.0, -0.1826520e-3, 0.2241389e-2, -0.1234567e-1, -0.8437e-1, 0.5678901e-3,
+                                      0.0], rtol=1e-15)
+    assert gm.dt == 0.005
+    # "Kobe, Japan" has a comma of its own: the date is found after it
+    assert (gm.event, gm.date, gm.station, gm.component) == ("Kobe, Japan", "1/16/1995", "KJMA", "000")
+    lines[5] = "-0.1234567E-01-0.84.37000E-01"  # not two numbers: named as it is
+    with pytest.raises(RecordError, match=r"line 6: '-0.84.37000E-01' is not a number"):
+        GroundMotion.from_at2(write_bytes(tmp_path / "bad.AT2", lines, "\n"))
+
+
+def test_a_record_in_g_stays_in_g_at_any_scale(tmp_path):
+    gm = GroundMotion.from_at2(at2(tmp_path))
+    for f in (0.5, 2.0, 3.7, -1.0):
+        assert gm.scaled(f).units == "g" and GroundMotion.from_at2(at2(tmp_path), scale=f).units == "g"
+    si = gm.scaled(nvib.STANDARD_GRAVITY)
+    assert si.units == "m/s^2" and si.scaled(1.0 / nvib.STANDARD_GRAVITY).units == "g"
+    assert si.scaled(2.0).units == "m/s^2"
+    assert gm.scaled(2.0).label == gm.label and gm.scaled(2.0).component == "090"
+    one = write(tmp_path / "one.txt", "\n".join(str(v) for v in VALUES))
+    assert GroundMotion.from_file(one, dt=0.01, units="m/s^2").scaled(3.0).units == "m/s^2"
+    assert GroundMotion.from_file(one, dt=0.01).units == ""  # a plain file says nothing of its unit
+    with pytest.raises(nvib.ArgumentError, match="an AT2 file is in g") as exc:
+        GroundMotion.from_file(at2(tmp_path), units="m/s^2")
+    assert exc.value.argument == "units"
+
+
+def test_scaled_to_sa_matches_the_exact_spectrum(tmp_path):
+    """Sa(T1) from the exact elastic spectrum (nvib._core); the scaled record has that PSa at T1."""
+    from nvib.analysis.spectrum import exact_sdof_peaks
+
+    t = np.arange(0, 4.0, 0.01)
+    gm = GroundMotion.from_array(np.sin(5 * t) * np.exp(-0.3 * t), dt=0.01, units="g", name="pulse")
+    sd, _ = exact_sdof_peaks(np.arange(0, 12.0, 0.0025), gm(np.arange(0, 12.0, 0.0025)), [0.8], 0.05)
+    assert gm.psa(0.8) == pytest.approx(sd[0] * (2 * np.pi / 0.8) ** 2, rel=1e-3)
+    scaled, factor = gm.scaled_to_sa(0.8, 0.3)
+    assert factor == pytest.approx(0.3 / gm.psa(0.8), rel=1e-14)
+    assert scaled.psa(0.8) == pytest.approx(0.3, rel=1e-12) and scaled.units == "g"
+    np.testing.assert_allclose(scaled.a, gm.a * factor, rtol=1e-15)
+    s2, f2 = gm.scaled_to_sa(0.8, 0.3, damping=0.02)
+    assert s2.psa(0.8, damping=0.02) == pytest.approx(0.3, rel=1e-12) and f2 < factor
+    uneven = GroundMotion(np.r_[0.0, np.cumsum(np.full(399, 0.01) * (1 + 0.1 * (np.arange(399) % 2)))],
+                          np.sin(5 * t) * np.exp(-0.3 * t))
+    assert uneven.dt is None and uneven.psa([0.5, 1.0]).shape == (2,)
+    for bad, argument in (((0.0, 1.0), "period"), ((1.0, -1.0), "value")):
+        with pytest.raises(nvib.ArgumentError) as exc:
+            gm.scaled_to_sa(*bad)
+        assert exc.value.argument == argument
+    with pytest.raises(nvib.ArgumentError, match="PSa at T = 1 s is 0") as exc:
+        GroundMotion.from_array([0.0, 0.0, 0.0], dt=0.01).scaled_to_sa(1.0, 0.5)
+    assert exc.value.argument == "period"
 
 
 @pytest.mark.skipif(os.name != "posix", reason="symbolic links, /dev/zero and pipes")
@@ -265,3 +393,94 @@ def test_shipped_record_is_what_its_generator_makes():
     assert run.returncode == 0, run.stdout + run.stderr
     gm = nvib.GroundMotion.from_at2(record)
     assert len(gm.t) == 3001 and gm.dt == pytest.approx(0.01) and gm.pga == pytest.approx(0.40, rel=1e-6)
+
+
+# ---- a scene under another record: load_scene(ground_motion=) and nvib run --record ----------------
+
+def northridge_like(tmp_path, scale=1.0):
+    """A PEER-like file with CR CR LF line ends: a decaying 2 Hz pulse train in g, 0.01 s apart."""
+    t = np.arange(0, 3.0, 0.01)
+    a = scale * 0.3 * np.sin(2 * np.pi * 2.0 * t) * np.exp(-t)
+    header = ["PEER NGA STRONG MOTION DATABASE RECORD", "Northridge-01, 1/17/1994, Sylmar - Olive View Med FF, 360",
+              "ACCELERATION TIME SERIES IN UNITS OF G", f"NPTS=  {t.size}, DT=   .0100 SEC,"]
+    return write_bytes(tmp_path / "RSN1086_NORTHR_SYL360.AT2", header + peer_written(list(a)), "\r\r\n")
+
+
+def test_load_scene_under_another_record(tmp_path):
+    """The record replaces the scene's ground motion, in m/s^2 (a record in g is converted); a scene without
+    one is refused naming ground_motion."""
+    gm = GroundMotion.from_at2(northridge_like(tmp_path))
+    model = nvib.load_scene("building_inelastic", ground_motion=gm)
+    si = nvib.load_scene("building_inelastic", ground_motion=gm.scaled(nvib.STANDARD_GRAVITY))
+    a = nvib.solve(model, nvib.Newmark(), dt=0.005, t_end=1.0)
+    b = nvib.solve(si, nvib.Newmark(), dt=0.005, t_end=1.0)
+    own = nvib.solve(nvib.load_scene("building_inelastic"), nvib.Newmark(), dt=0.005, t_end=1.0)
+    np.testing.assert_array_equal(a.u, b.u)
+    assert not np.array_equal(a.u, own.u) and np.max(np.abs(a.u)) > 0
+    for scene, without, match in (("pendulum", (), r"no ground_acceleration effect\)"),
+                                  ("building", ("ground",), "left out by without")):
+        with pytest.raises(nvib.ArgumentError, match=match) as exc:
+            nvib.load_scene(scene, ground_motion=gm, without=without)
+        assert exc.value.argument == "ground_motion"
+    with pytest.raises(TypeError, match="expected a GroundMotion"):
+        nvib.load_scene("building", ground_motion=[0.0, 1.0])
+
+
+def test_run_under_a_record_scaled_to_sa(tmp_path, capsys):
+    from _cli import run_cli
+
+    path = northridge_like(tmp_path)
+    gm = GroundMotion.from_at2(path)
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--record", path, "--sa", "0.9", "0.5", "--t-end",
+                             "1", "--scheme", "newmark", "--out", tmp_path / "r.npz")
+    assert code == 0, err
+    scaled, factor = gm.scaled_to_sa(0.9, 0.5)
+    line = next(ln for ln in out.splitlines() if ln.startswith("record"))
+    assert "RSN1086, Northridge-01, Sylmar - Olive View Med FF, 360" in line
+    assert f"scaled by {factor:.6g} to Sa(T1 = 0.9 s, 5 %) = 0.5 g (was {gm.psa(0.9):.4g} g)" in line
+    assert "lasts until t = 2.99 s, the run ends at 1 s" in err
+    res = nvib.load_result(tmp_path / "r.npz")
+    want = nvib.solve(nvib.load_scene("building_inelastic", ground_motion=scaled), nvib.Newmark(), dt=0.002,
+                      t_end=1.0)
+    np.testing.assert_allclose(res.u, want.u, rtol=0, atol=1e-12 * np.max(np.abs(want.u)))
+
+    code, out, err = run_cli(capsys, "run", "isolated", "--record", path, "--scale", "2", "--t-end", "0.2")
+    assert code == 0, err
+    assert f"scaled by 2: PGA {2 * gm.pga:.4g} g" in out
+    assert run_cli(capsys, "run", "building", "--record", path, "--sa", "1", "0.2", "--sa-damping", "0.02",
+                   "--t-end", "0.1")[0] == 0
+
+    one = write(tmp_path / "one.txt", "\n".join(repr(float(x)) for x in gm.a * 9.80665))
+    code, out, err = run_cli(capsys, "run", "building", "--record", one, "--record-dt", "0.01", "--record-units",
+                             "m/s^2", "--t-end", "0.1")
+    assert code == 0 and "PGA" in out and "m/s^2" in out
+
+
+@pytest.mark.parametrize("argv, argument, needle", [
+    (["pendulum", "--record", "{rec}"], "--record", "scene 'pendulum' has no ground motion to replace"),
+    (["building", "--record", "{rec}", "--scale", "2", "--sa", "1", "0.3"], "--sa", "not allowed with argument --scale"),
+    (["building", "--scale", "2"], "--scale", "give --record FILE too"),
+    (["building", "--record", "{bad}"], "--record", "bad.AT2, line 6: 'x.1E-02' is not a number"),
+    (["building", "--record", "{missing}"], "--record", "no such file"),
+    (["building", "--record", "{one}", "--record-dt", "0.01"], "--record-units", "is not known"),
+    (["building", "--record", "{one}"], "--record-dt", "give their time step"),
+    (["building", "--record", "{rec}", "--sa", "1", "0"], "--sa", "must be > 0"),
+    (["building", "--record", "{rec}", "--sa", "1", "nan"], "--sa", "must be finite"),
+    (["building", "--record", "{rec}", "--sa", "1", "0.3", "--sa-damping", "1.5"], "--sa-damping", "expected 0 <="),
+    (["building", "--record", "{zero}", "--sa", "1", "0.3"], "--sa", "PSa at T = 1 s is 0"),
+])
+def test_run_record_bad_input(tmp_path, argv, argument, needle):
+    """Bad input exits 2 with one line naming the option, no traceback."""
+    from _cli import nvib_subprocess
+    from test_cli_bad_input import assert_bad_input
+
+    header = ["PEER NGA STRONG MOTION DATABASE RECORD", "Northridge-01, 1/17/1994, Sylmar, 360",
+              "ACCELERATION TIME SERIES IN UNITS OF G", "NPTS=  7, DT=   .0100 SEC,"]
+    bad = peer_written(NORTHRIDGE)
+    bad[1] = bad[1][:15] + "  x.1E-02"
+    files = {"rec": northridge_like(tmp_path), "bad": write_bytes(tmp_path / "bad.AT2", header + bad, "\r\r\n"),
+             "missing": str(tmp_path / "missing.AT2"), "one": write(tmp_path / "one.txt", "0\n0.1\n-0.1\n"),
+             "zero": write_bytes(tmp_path / "zero.AT2", header + peer_written([0.0] * 7), "\n")}
+    p = nvib_subprocess("run", *[a.format(**files) for a in argv], "--t-end", "0.1", timeout=60)
+    last = assert_bad_input(p, "run", argument)
+    assert needle in last, last

@@ -140,7 +140,9 @@ def test_command_line(tmp_path, capsys):
     assert main(["spectrum", str(path), "--dt", "0.01", "--periods", "0.1,0.5,2", "--damping", "0.02", "0.05",
                  "--out", str(out)]) == 0
     lines = out.read_text(encoding="utf-8").splitlines()
-    assert lines[0].startswith("damping,period,Sd") and len(lines) == 1 + 2 * 3
+    # a plain file says nothing of its unit: the header says the values are the record's
+    assert lines[0] == ("damping,period [s],Sd [record units s^2],PSv [record units s],PSa [record units],"
+                        "Sa [record units],error,dt [s]") and len(lines) == 1 + 2 * 3
     sp = nvib.spectrum(gm, [0.1, 0.5, 2.0], damping=0.05)
     assert float(lines[4].split(",")[2]) == sp.Sd[0]  # the CSV holds the library's numbers
     for argv, arg in ((["spectrum", str(path)], "--dt"),
@@ -177,6 +179,12 @@ def test_the_exact_spectrum_takes_several_damping_ratios_and_any_damping():
     for row, z in enumerate((0.02, 0.05, 1.5)):
         np.testing.assert_array_equal(sp.Sd[row], nvib.spectrum(gm, periods, damping=z).Sd)
     assert np.all(sp.Sd[0] > sp.Sd[2])  # more damping, less response
+    rows = sp.by_damping()
+    assert [r.damping for r in rows] == [0.02, 0.05, 1.5]
+    np.testing.assert_array_equal(rows[1].Sa, sp.Sa[1])
+    from nvib.plot import spectrum_figure
+
+    assert len(spectrum_figure(sp).axes[0].lines) == 2 * 3  # PSa and Sa for each damping ratio
 
 
 @pytest.mark.parametrize("kw", [dict(accuracy=1e-3), dict(t_end=10.0), dict(max_halvings=2), dict(threads=2)])
@@ -191,3 +199,40 @@ def test_a_record_too_large_for_doubles_is_named():
     with pytest.raises(nvib.ArgumentError, match=r"^record: its response at T = 0\.5 s is not finite") as exc:
         nvib.spectrum(record().scaled(1e306), [0.5, 1.0])
     assert exc.value.argument == "record"
+
+
+def test_spectra_in_g_carry_their_units(tmp_path, capsys):
+    """A record in g stays in g at any --scale: the table and CSV headers say so, --units turns the
+    accelerations into m/s^2 or g (Sd in m whenever the unit is known), and the plot is drawn in g."""
+    from nvib.cli import main
+    from nvib.plot import spectrum_figure
+
+    gm = record()
+    path = tmp_path / "rec.txt"
+    path.write_text("\n".join(repr(float(x)) for x in gm.a) + "\n", encoding="utf-8")
+    args = ["spectrum", str(path), "--dt", "0.01", "--periods", "0.1,0.5,2", "--record-units", "g", "--scale", "2"]
+    assert main(args + ["--out", str(tmp_path / "g.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "Sd [m]" in out and "PSa [g]" in out and "Sa [g]" in out
+    assert main(args + ["--units", "m/s^2", "--out", str(tmp_path / "si.csv"), "--plot", str(tmp_path / "s.png")]) == 0
+    assert "PSa [m/s^2]" in capsys.readouterr().out and (tmp_path / "s.png").stat().st_size > 0
+    g = (tmp_path / "g.csv").read_text(encoding="utf-8").splitlines()
+    si = (tmp_path / "si.csv").read_text(encoding="utf-8").splitlines()
+    assert g[0] == "damping,period [s],Sd [m],PSv [m/s],PSa [g],Sa [g],error,dt [s]"
+    assert si[0] == "damping,period [s],Sd [m],PSv [m/s],PSa [m/s^2],Sa [m/s^2],error,dt [s]"
+    sp = nvib.spectrum(gm.scaled(2.0), [0.1, 0.5, 2.0])
+    row_g, row_si = [float(x) for x in g[2].split(",")], [float(x) for x in si[2].split(",")]
+    assert row_g[4] == pytest.approx(sp.PSa[1], rel=1e-12)  # in g, as the record
+    assert row_si[4] == pytest.approx(sp.PSa[1] * nvib.STANDARD_GRAVITY, rel=1e-12)
+    assert row_g[2] == row_si[2] == pytest.approx(sp.Sd[1] * nvib.STANDARD_GRAVITY, rel=1e-12)  # Sd in m
+    with pytest.raises(SystemExit) as exc:  # a plain file's unit is not known: --units cannot convert it
+        main(["spectrum", str(path), "--dt", "0.01", "--units", "g"])
+    assert exc.value.code == 2 and "argument --units" in capsys.readouterr().err
+
+    spec = nvib.spectrum(nvib.GroundMotion.from_array(gm.a, 0.01, units="m/s^2"), [0.2, 1.0])
+    assert spec.units == "m/s^2" and spec.in_units("g").PSa[0] == pytest.approx(spec.PSa[0] / 9.80665, rel=1e-15)
+    fig = spectrum_figure(spec, units="g")
+    assert fig.axes[0].get_ylabel() == "spectral acceleration [g]" and fig.axes[1].get_ylabel().endswith("[m]")
+    with pytest.raises(nvib.ArgumentError, match="unit is not known") as exc:
+        spectrum_figure(nvib.spectrum(nvib.GroundMotion.from_array(gm.a, 0.01), [1.0]), units="g")
+    assert exc.value.argument == "units"

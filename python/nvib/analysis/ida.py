@@ -9,7 +9,7 @@ import dataclasses
 
 import numpy as np
 
-from .. import _checks, _core
+from .. import _checks
 from .._batch import RunError, solve_many
 from .._labels import scheme_label
 from .._model import Model
@@ -160,12 +160,7 @@ def intensity(record: GroundMotion, im="sa", *, period: float | None = None, dam
                                         f"{_checks.suggestion(str(im), ['sa', 'pga'])}")
     if period is None:
         raise _checks.value_error("period", "im='sa' needs the period T1 of Sa(T1) [s]")
-    period = _checks.real("period", period, positive=True)
-    if record.dt is not None:
-        out = _core.elastic_spectrum(record.a, record.dt, [period], damping, t0=float(record.t[0]))
-    else:
-        out = _core.elastic_spectrum_at(record.t, record.a, [period], damping)
-    return float(out["PSa"][0])
+    return float(record.psa([period], damping)[0])
 
 
 def _im_label(im, period, damping) -> str:

@@ -27,7 +27,7 @@ from .. import _checks, _core
 from .._batch import RunError, solve_many
 from .._errors import NvibError, error_for
 from .._model import Model
-from .._records import GroundMotion
+from .._records import STANDARD_GRAVITY, GroundMotion
 
 __all__ = ["Spectrum", "spectrum", "exact_sdof_peaks", "rotd_spectrum"]
 
@@ -42,7 +42,8 @@ _WORK_ARRAYS = 16  # arrays of one double per saved state besides the histories:
 class Spectrum:
     """Spectral values per period: ``periods`` [s], ``damping``, ``Sd`` (peak relative displacement),
     ``Sv`` (peak relative velocity), ``PSv`` = w Sd, ``PSa`` = w^2 Sd and ``Sa`` (peak absolute
-    acceleration), in the record's units (Sd in those units times s^2).
+    acceleration). ``units``: the record's ("g", "m/s^2" or "" when not known): PSa and Sa are in it,
+    Sd in it times s^2 (m for m/s^2), Sv and PSv in it times s; ``in_units("g")`` converts.
 
     ``check`` says how they were obtained and what ``error`` means:
     - "exact": the closed-form response to the record, linear between its samples (Nigam & Jennings
@@ -68,6 +69,49 @@ class Spectrum:
     record: str = ""
     scheme: str = ""
     Sv: np.ndarray | None = None
+    units: str = ""
+
+    def by_damping(self) -> list:
+        """One Spectrum per damping ratio (a spectrum of several damping ratios split into its rows)."""
+        if np.ndim(self.damping) == 0:
+            return [self]
+        rows = []
+        for k, z in enumerate(np.asarray(self.damping)):
+            pick = {f: getattr(self, f)[k] for f in ("Sd", "PSv", "PSa", "Sa", "dt")}
+            rows.append(dataclasses.replace(self, damping=float(z), **pick,
+                                            error=None if self.error is None else self.error[k],
+                                            Sv=None if self.Sv is None else self.Sv[k]))
+        return rows
+
+    def in_units(self, units: str) -> Spectrum:
+        """The same spectrum with its accelerations in ``units`` ("g" or "m/s^2"; Sd, PSv follow: g s^2 or m).
+        Refused, naming ``units``, when the spectrum's own unit is not known."""
+        factor = unit_factor(self.units, units)
+        return dataclasses.replace(self, Sd=self.Sd * factor, PSv=self.PSv * factor, PSa=self.PSa * factor,
+                                   Sa=self.Sa * factor, Sv=None if self.Sv is None else self.Sv * factor,
+                                   units=units)
+
+
+ACCELERATION_UNITS = {"g": STANDARD_GRAVITY, "m/s^2": 1.0}  # in m/s^2
+
+
+def unit_factor(have: str, want: str) -> float:
+    """The factor turning accelerations in ``have`` into ``want`` (both "g" or "m/s^2")."""
+    if want not in ACCELERATION_UNITS:
+        raise _checks.value_error("units", f"expected one of {', '.join(ACCELERATION_UNITS)}, got {want!r}")
+    if have not in ACCELERATION_UNITS:
+        raise _checks.value_error("units", f"the record's unit is not known{f' ({have!r})' if have else ''}, so its "
+                                           f"values cannot be given in {want}")
+    return ACCELERATION_UNITS[have] / ACCELERATION_UNITS[want]
+
+
+def unit_labels(units: str) -> dict:
+    """The units of Sd, PSv and PSa for accelerations in ``units``: m and m/s for m/s^2."""
+    if units == "m/s^2":
+        return {"Sd": "m", "PSv": "m/s", "PSa": "m/s^2"}
+    if units:
+        return {"Sd": f"{units} s^2", "PSv": f"{units} s", "PSa": units}
+    return {"Sd": "record units s^2", "PSv": "record units s", "PSa": "record units"}
 
 
 def _exact_step(u, v, a0, a1, w, z, h):
@@ -197,13 +241,15 @@ def spectrum(record: GroundMotion, periods, *, damping=0.05, scheme=None, law: d
                                                 f"{np.max(np.abs(record.a)):.3g}, are too large for doubles")
         rdt = record.dt if record.dt is not None else float(np.min(np.diff(record.t)))
         return Spectrum(periods, dampings if dampings.ndim else float(dampings), out["Sd"], out["PSv"], out["PSa"],
-                        out["Sa"], np.full(periods.size, rdt), None, wall, "exact", record.name, "", out["Sv"])
+                        out["Sa"], np.full(periods.size, rdt), None, wall, "exact", record.name, "", Sv=out["Sv"],
+                        units=record.units)
     if dampings.ndim:  # runs: one spectrum per damping ratio, stacked
         parts = [spectrum(record, periods, damping=float(z), scheme=scheme, law=law, accuracy=accuracy, t_end=t_end,
                           threads=threads, max_halvings=max_halvings) for z in dampings]
         stack = {k: np.vstack([getattr(p, k) for p in parts]) for k in ("Sd", "PSv", "PSa", "Sa", "dt", "error")}
         return Spectrum(periods, dampings, stack["Sd"], stack["PSv"], stack["PSa"], stack["Sa"], stack["dt"],
-                        stack["error"], sum(p.wall_time for p in parts), parts[0].check, record.name, parts[0].scheme)
+                        stack["error"], sum(p.wall_time for p in parts), parts[0].check, record.name, parts[0].scheme,
+                        units=record.units)
     damping = float(dampings)
     if not 0.0 <= damping < 1.0:
         raise _checks.value_error("damping", f"expected 0 <= damping < 1 for runs, got {damping}")
@@ -255,7 +301,7 @@ def spectrum(record: GroundMotion, periods, *, damping=0.05, scheme=None, law: d
         dts[todo] /= 2.0
     w = 2.0 * math.pi / periods
     return Spectrum(periods, damping, Sd, w * Sd, w * w * Sd, Sa, dts, err, wall,
-                    "exact check" if exact else "half step", record.name, nvib.scheme_label(scheme))
+                    "exact check" if exact else "half step", record.name, nvib.scheme_label(scheme), units=record.units)
 
 
 def _memory_needed(group: int, steps: float, exact: bool) -> float:

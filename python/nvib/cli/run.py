@@ -16,7 +16,8 @@ OUT_FORMATS = FORMATS
 MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
 RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
              "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof",
-             "collapse_deformation": "--collapse-deformation", "record": "--record-effect", "energy": "--energy"}
+             "collapse_deformation": "--collapse-deformation", "record": "--record-effect", "energy": "--energy",
+             "ground_motion": "--record"}
 
 EPILOG = """\
 Scheme parameters accept fractions (--eta 1/12). Exit status: 0 success (also a structure that
@@ -29,6 +30,7 @@ examples:
   nvib run vehicle --without contact --dof z_w1 --energy --out vehicle.npz
   nvib run building --scheme galpha --rho-inf 0.8 --dt 1e-3 --save-every 10 --out building.csv
   nvib run building_inelastic --scheme newmark --measure storey1 --plot storey1.png
+  nvib run building_inelastic --record RSN953_NORTHR_MUL009.AT2 --sa 0.9 0.5   # Sa(0.9 s, 5 %) = 0.5 g
 """
 
 
@@ -73,6 +75,20 @@ def add_parser(sub) -> None:
     g.add_argument("--max-energy-error", type=c.bound, metavar="F",
                    help="with --energy: stop as diverged once the energy balance error exceeds F times the energy "
                         "scale (default 0.5; 'inf': no check)")
+    g = p.add_argument_group("ground motion")
+    g.add_argument("--record", metavar="FILE", dest="ground_record",
+                   help="run the scene under this record (a PEER .AT2 file in g, or a text file of one column with "
+                        "--record-dt or two columns t, a) in place of its own ground motion")
+    g.add_argument("--record-dt", type=c.positive_real, metavar="DT", help="the sample step of a one-column --record [s]")
+    g.add_argument("--record-units", choices=("g", "m/s^2"),
+                   help="what a plain --record file's values are in (an AT2 file is in g)")
+    how = g.add_mutually_exclusive_group()
+    how.add_argument("--scale", type=c.real, metavar="S", help="multiply the --record by S")
+    how.add_argument("--sa", type=c.positive_real, nargs=2, metavar=("T1", "VALUE"),
+                     help="scale the --record so that its exact pseudo-spectral acceleration at the period T1 [s] "
+                          "is VALUE (in the record's unit: g for an AT2 file)")
+    g.add_argument("--sa-damping", type=c.real, default=0.05, metavar="Z",
+                   help="the damping ratio of --sa (default 0.05)")
     g = p.add_argument_group("output")
     g.add_argument("--out", metavar="FILE", help=f"write the history to FILE{' or FILE'.join(OUT_FORMATS)} "
                                                  "(.nc: netCDF, needs xarray)")
@@ -89,11 +105,50 @@ def effect_summary(model) -> str:
     return ", ".join(k if n == 1 else f"{k} x{n}" for k, n in counts.items())
 
 
-def load_model(args):
+def ground_motion(args):
+    """(the --record as given, scaled by --scale or to --sa, a line for the summary), or (None, None)."""
+    from .. import GroundMotion, RecordError
+
+    record = args.ground_record
+    given = [f for f, v in (("--record-dt", args.record_dt), ("--record-units", args.record_units),
+                            ("--scale", args.scale), ("--sa", args.sa)) if v is not None]
+    if record is None:
+        if given:
+            raise c.Usage(given[0], "it applies to a --record; give --record FILE too")
+        return None, None
+    if not 0.0 <= args.sa_damping < 1.0:
+        raise c.Usage("--sa-damping", f"expected 0 <= damping < 1, got {args.sa_damping:g}")
+    try:
+        gm = GroundMotion.from_file(record, dt=args.record_dt, units=args.record_units or "")
+    except RecordError as exc:
+        raise c.Usage("--record", str(exc)) from None
+    except ValueError as exc:
+        raise c.usage_from(exc, {"dt": "--record-dt", "units": "--record-units"}, default="--record") from None
+    if gm.units not in ("g", "m/s^2"):
+        raise c.Usage("--record-units", f"the unit of {record}'s values is not known (the scenes are in m/s^2): "
+                                        "give --record-units g or m/s^2")
+    text = f"{gm.label} ({gm.name}): {len(gm)} samples, " + (f"dt = {gm.dt:g} s, " if gm.dt else "") + \
+        f"{gm.duration:g} s, PGA {gm.pga:.4g} {gm.units}"
+    if args.scale is not None:
+        gm = gm.scaled(args.scale)
+        text += f"; scaled by {args.scale:g}: PGA {gm.pga:.4g} {gm.units}"
+    elif args.sa is not None:
+        period, value = args.sa
+        before = float(gm.psa([period], args.sa_damping)[0])
+        try:
+            gm, factor = gm.scaled_to_sa(period, value, damping=args.sa_damping)
+        except ValueError as exc:
+            raise c.Usage("--sa", str(exc).removeprefix("period: ")) from None
+        text += (f"; scaled by {factor:.6g} to Sa(T1 = {period:g} s, {100 * args.sa_damping:g} %) = {value:g} "
+                 f"{gm.units} (was {before:.4g} {gm.units}): PGA {gm.pga:.4g} {gm.units}")
+    return gm, text
+
+
+def load_model(args, ground=None):
     from .. import load_scene
 
     try:
-        return load_scene(args.scene, without=args.without or ())
+        return load_scene(args.scene, without=args.without or (), ground_motion=ground)
     except OSError as exc:  # a missing file
         raise c.Usage("SCENE", str(exc).removeprefix("scene: ")) from None
     except ValueError as exc:  # unknown name, malformed scene, unknown --without
@@ -111,7 +166,9 @@ def run(args) -> int:
     if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     scheme = c.make_scheme(args.scheme, args)
-    model = load_model(args)
+    ground, ground_text = ground_motion(args)
+    model = load_model(args, ground)
+    args.ground_text = ground_text
     dof = args.dof if args.dof is not None else model.scene["plot_dof"]
     if dof not in model.dofs:
         raise c.Usage("--dof", f"unknown DOF {dof!r} in scene {model.scene['name']!r} (DOFs: {', '.join(model.dofs)})")
@@ -137,6 +194,9 @@ def run(args) -> int:
         raise c.Usage("--dt", f"the scene {model.scene['name']!r} sets no dt; give --dt")
     if t_end is None:
         raise c.Usage("--t-end", f"the scene {model.scene['name']!r} sets no t_end; give --t-end")
+    if ground is not None and ground.t[-1] > t_end:
+        model.scene["notes"].append(f"the --record lasts until t = {ground.t[-1]:g} s, the run ends at "
+                                    f"{t_end:g} s (--t-end)")
     try:
         n_steps = _core.run_steps(0.0, t_end, dt)
     except (ValueError, OverflowError) as exc:
@@ -264,6 +324,8 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
     lines = [("scene", title)]
     if args.without:
         lines.append(("without", ", ".join(args.without)))
+    if getattr(args, "ground_text", None):
+        lines.append(("record", args.ground_text))
     lines.append(("scheme", repr(scheme)))
     saved = f"{len(res.t)} state{'s' if len(res.t) != 1 else ''} saved"
     if save_every > 1:

@@ -51,7 +51,13 @@ def add_parser(sub) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("record", help="the record file")
     p.add_argument("--dt", type=c.positive_real, help="the sample step of a one-column file [s]")
-    p.add_argument("--scale", type=c.real, default=1.0, help="factor on the values (9.80665: g to m/s^2; default 1)")
+    p.add_argument("--scale", type=c.real, default=1.0,
+                   help="factor on the values (default 1; a record in g stays in g, 9.80665 turns g into m/s^2)")
+    p.add_argument("--record-units", choices=("g", "m/s^2"),
+                   help="what a plain file's values are in (an AT2 file is in g)")
+    p.add_argument("--units", choices=("g", "m/s^2"),
+                   help="spectral accelerations printed, written and plotted in g or m/s^2 (Sd then in m; "
+                        "default: the record's unit)")
     p.add_argument("--damping", type=c.real, nargs="+", default=[0.05], help="damping ratios (default 0.05)")
     p.add_argument("--periods", type=periods, default=periods("0.05:5:100"),
                    help="FIRST:LAST:COUNT log-spaced, or T1,T2,... (default 0.05:5:100) [s]")
@@ -78,14 +84,23 @@ def run(args) -> int:
     if args.out is not None:
         c.check_output("--out", args.out, (".csv",))
     try:
-        record = GroundMotion.from_file(args.record, dt=args.dt, scale=args.scale)
+        record = GroundMotion.from_file(args.record, dt=args.dt, scale=args.scale, units=args.record_units or "")
     except RecordError as exc:
         raise c.Usage("record", str(exc)) from None
     except ValueError as exc:
-        raise c.usage_from(exc, {"dt": "--dt", "scale": "--scale"}, default="record") from None
+        raise c.usage_from(exc, {"dt": "--dt", "scale": "--scale", "units": "--record-units"},
+                           default="record") from None
+    if args.units is not None and record.units not in ("g", "m/s^2"):
+        raise c.Usage("--units", f"the unit of {args.record}'s values is not known; give --record-units")
+    units = args.units or record.units
     if args.accuracy is not None and args.scheme is None:
         raise c.Usage("--accuracy", "applies to runs with --scheme: the spectrum without one is exact")
     scheme = c.make_scheme(args.scheme, args) if args.scheme is not None else None
+    from ..analysis.spectrum import unit_labels
+
+    sd_units = unit_labels("m/s^2" if units else "")
+    heads = {"Sd": sd_units["Sd"], "PSv": sd_units["PSv"], "PSa": unit_labels(units)["PSa"],
+             "Sa": unit_labels(units)["PSa"]}
     print(f"{record}")
     results = []
     for z in args.damping:
@@ -99,59 +114,48 @@ def run(args) -> int:
         except (ValueError, TypeError) as exc:  # periods too short or too long for the memory, an accuracy too fine
             raise c.usage_from(exc, FLAGS) from None
         results.append(sp)
+        shown = sp.in_units(units) if units else sp
+        si = sp.in_units("m/s^2") if units else sp  # Sd, PSv in m and m/s when the unit is known
         if sp.error is None:
             print(f"damping {z:g}: {sp.periods.size} periods, exact (closed form, peaks between samples), "
                   f"{c.seconds(sp.wall_time)}")
         else:
             print(f"damping {z:g}: {sp.periods.size} periods, {sp.scheme}, runs {c.seconds(sp.wall_time)}, "
                   f"max error of Sd and Sa {np.max(sp.error):.1e} ({sp.check})")
-        rows = [["T [s]", "Sd", "PSv", "PSa", "Sa"] + (["error"] if sp.error is not None else [])]
+        rows = [["T [s]"] + [f"{k} [{v}]" for k, v in heads.items()] + (["error"] if sp.error is not None else [])]
         step = max(1, sp.periods.size // 10)
         for k in range(0, sp.periods.size, step):
-            rows.append([f"{sp.periods[k]:.4g}", f"{sp.Sd[k]:.4g}", f"{sp.PSv[k]:.4g}", f"{sp.PSa[k]:.4g}",
-                         f"{sp.Sa[k]:.4g}"] + ([f"{sp.error[k]:.1e}"] if sp.error is not None else []))
+            rows.append([f"{sp.periods[k]:.4g}", f"{si.Sd[k]:.4g}", f"{si.PSv[k]:.4g}", f"{shown.PSa[k]:.4g}",
+                         f"{shown.Sa[k]:.4g}"] + ([f"{sp.error[k]:.1e}"] if sp.error is not None else []))
         print("\n".join("  " + line for line in c.table(rows, right=set(range(len(rows[0]))))))
-    units = "m/s^2" if args.scale == 9.80665 else ("g" if record.units == "g" else "record units")
     code = 0
     if args.out:
         try:
             with open(args.out, "w", encoding="utf-8") as fh:
-                fh.write("damping,period,Sd,PSv,PSa,Sa,error,dt\n")
+                # each column's unit in its header: "PSa [g]" stays "PSa [g]" at any --scale
+                fh.write(",".join(["damping", "period [s]"] + [f"{k} [{v}]" for k, v in heads.items()]
+                                  + ["error", "dt [s]"]) + "\n")
                 for sp in results:
+                    shown = sp.in_units(units) if units else sp
+                    si = sp.in_units("m/s^2") if units else sp
                     for k in range(sp.periods.size):  # shortest round-trip decimals
                         error = sp.error[k] if sp.error is not None else math.nan  # exact: no error to report
-                        values = (sp.damping, sp.periods[k], sp.Sd[k], sp.PSv[k], sp.PSa[k], sp.Sa[k], error,
-                                  sp.dt[k])
+                        values = (sp.damping, sp.periods[k], si.Sd[k], si.PSv[k], shown.PSa[k], shown.Sa[k],
+                                  error, sp.dt[k])
                         fh.write(",".join(repr(float(x)) for x in values) + "\n")
             print(f"wrote {args.out}")
         except OSError as exc:
             print(f"nvib spectrum: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
             code = 1
     if args.plot:
-        import matplotlib
+        from ..plot import spectrum_figure
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
-        for sp in results:
-            line, = ax1.loglog(sp.periods, sp.PSa, label=f"PSa, ζ = {sp.damping:g}")
-            ax1.loglog(sp.periods, sp.Sa, ":", color=line.get_color(), label=f"Sa (absolute), ζ = {sp.damping:g}")
-            ax2.loglog(sp.periods, sp.Sd, color=line.get_color(), label=f"Sd, ζ = {sp.damping:g}")
-        ax1.set_ylabel(f"spectral acceleration [{units}]")
-        ax2.set_ylabel(f"spectral displacement [{units} s^2]" if units != "m/s^2" else "spectral displacement [m]")
-        for ax in (ax1, ax2):
-            ax.set_xlabel("period T [s]")
-            ax.grid(True, which="both", alpha=0.3)
-            ax.legend(fontsize=7)
-        how = "exact" if scheme is None else f"{results[0].scheme}, accuracy {results[0].error.max():.1e} reached"
-        fig.suptitle(f"{record.name}: {how}")
-        fig.tight_layout()
+        how = "exact" if scheme is None else f"{results[0].scheme}, accuracy {np.max(results[0].error):.1e} reached"
+        fig = spectrum_figure(results, units=units or None, title=f"{record.label}: {how}")
         try:
             fig.savefig(args.plot, dpi=120)
             print(f"wrote {args.plot}")
         except OSError as exc:
             print(f"nvib spectrum: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
             code = 1
-        plt.close(fig)
     return code
