@@ -76,7 +76,9 @@ def main(argv=None) -> int:
 
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.8), constrained_layout=True)
     stripes.plot(ax=axes[0])
-    axes[0].plot(LEVELS, nvib.Fragility(THETA, BETA, 0, 0, "", "", "", "", 0).probability(LEVELS), "x", color="0.5",
+    from scipy import stats
+
+    axes[0].plot(LEVELS, stats.norm.cdf(np.log(LEVELS / THETA) / BETA), "x", color="0.5",
                  label=f"true: θ = {THETA} g, β = {BETA}")
     axes[0].legend(fontsize=7, loc="lower right")
     axes[0].set_title(f"Synthetic stripes: {LEVELS.size} levels x {RUNS} runs", fontsize=10)
