@@ -541,7 +541,8 @@ def test_evaluate_force_matches_the_laws():
 # its own subpackages, never a module it merely uses (os) nor the `annotations` feature that
 # `from __future__ import annotations` binds.
 PUBLIC_SUBPACKAGES = {"analysis": "nvib.analysis", "exact": "nvib.analysis.exact",
-                      "stability": "nvib.analysis.stability", "scenes": "nvib.scenes"}
+                      "stability": "nvib.analysis.stability", "scenes": "nvib.scenes",
+                      "fragility": "nvib.analysis.fragility"}
 
 
 def test_namespace_holds_no_stray_modules_or_future_features():

@@ -1,7 +1,7 @@
 """Every public entry point refuses an unknown keyword argument and a non-finite float, naming it.
 
 The entry points are found, not listed by hand: the callables of ``nvib.__all__``, of ``nvib.exact``,
-``nvib.stability`` and ``nvib.scenes``, and the public methods of the model, the stepper and the records.
+``nvib.stability``, ``nvib.scenes`` and ``nvib.fragility``, and the public methods of the model, the stepper and the records.
 Each needs a minimal valid call in CALLS below (a test fails for an entry point that has none, so a new one
 is covered when it is added); SKIP holds the exceptions and the result types, which take no settings. Then,
 one argument at a time: ``bogus_kw=1`` must raise TypeError naming ``bogus_kw``; NaN and Inf in each float
@@ -26,9 +26,10 @@ from nvib.analysis import exact, stability
 # Exceptions and what the library hands back (results, summaries, containers): built by nvib, not by a caller
 # with settings. Functions without arguments (folders, names) have nothing to refuse.
 SKIP = {"ArgumentError", "ArgumentTypeError", "ConvergenceError", "DivergenceError", "NvibError", "RecordError",
-        "SceneError", "SingularMatrixError", "Batch", "Energy", "Estimate", "Failure", "IDA", "LawResponse",
+        "SceneError", "SingularMatrixError", "Batch", "Energy", "Estimate", "Failure", "Fragility", "IDA", "LawResponse",
         "Reference", "Result", "RunError", "RunSummary", "Spectrum", "Stats", "Status", "cmake_dir", "include_dir",
-        "scene_names", "schemes", "stability.NvibError", "stability.Model", "stability.Stepper", "stability.StepLimit"}
+        "scene_names", "schemes", "stability.NvibError", "stability.Model", "stability.Stepper", "stability.StepLimit",
+        "fragility.Fragility"}
 
 # Parameters that take a float without saying so in their signature.
 FLOATS = {"rayleigh": ["zeta"], "rayleigh_coefficients": ["zeta"], "solve_many": ["t0", "max_displacement",
@@ -76,6 +77,10 @@ def calls(files) -> dict:
     stepper = nvib.Stepper(osc, nvib.Newmark(), 0.01)
     run = dict(dt=0.01, t_end=0.1)
     rows = files["rows"]
+    # an IDA's table as nvib.ida makes it (two records, three scales, one collapse), without the runs
+    ida = nvib.IDA(["a", "b"], np.array([1.0, 2.0, 3.0]), "peak_drift",
+                   np.array([[0.01, 0.03, np.inf], [0.025, 0.015, 0.04]]),
+                   np.array([[False, False, True], [False, False, False]]), {}, "CEMDTS")
     return {
         "CEMDTS": (nvib.CEMDTS, (), {}), "CentralDifference": (nvib.CentralDifference, (), {}),
         "GeneralizedAlpha": (nvib.GeneralizedAlpha, (), {}), "Newmark": (nvib.Newmark, (), {}),
@@ -144,6 +149,11 @@ def calls(files) -> dict:
                                            {"omega_h": [0.1, 1.0]}),
         "stability.stability_figure": (stability.stability_figure, ([nvib.Newmark()],), {"omega_h": [0.1, 1.0]}),
         "stability.scheme_label": (stability.scheme_label, (nvib.Newmark(),), {}),
+        "fragility.fit_collapse_ims": (nvib.fragility.fit_collapse_ims, ([0.8, 1.2],), {"censored": [1.5]}),
+        "fragility.fit_stripes": (nvib.fragility.fit_stripes, ([0.5, 1.0, 1.5], 4, [0, 2, 3]), {}),
+        "fragility.from_ida": (nvib.fragility.from_ida, (ida,), {"demand_limit": 0.02}),
+        "fragility.markdown_table": (nvib.fragility.markdown_table, ([nvib.fragility.fit_stripes([1.0, 2.0], 4,
+                                                                                                [1, 3])],), {}),
         "scenes.chain": (nvib.scenes.chain, (2,), {}),
         "scenes.lattice": (nvib.scenes.lattice, (2, 2), {}),
     }
@@ -156,7 +166,8 @@ def entry_points() -> list[str]:
         obj = getattr(nvib, name)
         if callable(obj) and not inspect.ismodule(obj):
             names.append(name)
-    for prefix, module in (("exact", exact), ("stability", stability), ("scenes", nvib.scenes)):
+    for prefix, module in (("exact", exact), ("stability", stability), ("scenes", nvib.scenes),
+                           ("fragility", nvib.fragility)):
         public = getattr(module, "__all__", None) or [n for n in dir(module) if not n.startswith("_")]
         for name in public:
             obj = getattr(module, name)
@@ -245,7 +256,8 @@ def _callable_for_signature(name: str):
     if "." not in name:
         return getattr(nvib, name)
     owner, attr = name.split(".", 1)
-    home = {"exact": exact, "stability": stability, "scenes": nvib.scenes, "Model": nvib.Model,
+    home = {"exact": exact, "stability": stability, "scenes": nvib.scenes, "fragility": nvib.fragility,
+            "Model": nvib.Model,
             "Stepper": nvib.Stepper, "GroundMotion": GroundMotion}[owner]
     return getattr(home, attr)
 

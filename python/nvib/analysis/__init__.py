@@ -1,3 +1,4 @@
 """Tools on top of the integrator: closed-form solutions (exact), reference
 solutions (reference), accuracy against cost (cost) and stability analysis
-(stability), response spectra of ground-motion records (spectrum)."""
+(stability), response spectra of ground-motion records (spectrum), incremental dynamic
+analysis (ida) and fragility functions fitted to its results (fragility)."""
