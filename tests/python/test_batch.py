@@ -13,10 +13,12 @@ import nvib
 from nvib import GroundMotion
 
 
-def two_storeys(signal):
+def two_storeys(signal=None, a=50.0):
+    """Two hardening storeys (a = 0: linear ones) on a shaking ground, by default the "decay" motion."""
+    signal = motions()[0] if signal is None else signal
     return nvib.Model([1e3, 1e3], dofs=["x1", "x2"], effects=[
-        {"type": "hardening_spring", "name": "storey1", "measure": {"x1": 1.0}, "k0": 4e5, "a": 50.0},
-        {"type": "hardening_spring", "name": "storey2", "measure": {"x2": 1.0, "x1": -1.0}, "k0": 3e5, "a": 50.0},
+        {"type": "hardening_spring", "name": "storey1", "measure": {"x1": 1.0}, "k0": 4e5, "a": a},
+        {"type": "hardening_spring", "name": "storey2", "measure": {"x2": 1.0, "x1": -1.0}, "k0": 3e5, "a": a},
         {"type": "damper", "name": "d1", "measure": {"x1": 1.0}, "c": 500.0},
         {"type": "ground_acceleration", "name": "ground", "signal": signal}])
 

@@ -50,15 +50,6 @@ def test_ida_measures_and_arguments():
     assert exc.value.argument == "records[0]"
 
 
-def linear_two_storeys(signal):
-    """two_storeys with linear storeys (hardening a = 0): its response is proportional to the record."""
-    return nvib.Model([1e3, 1e3], dofs=["x1", "x2"], effects=[
-        {"type": "hardening_spring", "name": "storey1", "measure": {"x1": 1.0}, "k0": 4e5, "a": 0.0},
-        {"type": "hardening_spring", "name": "storey2", "measure": {"x2": 1.0, "x1": -1.0}, "k0": 3e5, "a": 0.0},
-        {"type": "damper", "name": "d1", "measure": {"x1": 1.0}, "c": 500.0},
-        {"type": "ground_acceleration", "name": "ground", "signal": signal}])
-
-
 def test_records_are_scaled_to_each_level_of_sa_t1():
     """im='sa': each record is scaled so that its exact Sa(T1) equals the level (Vamvatsikos & Cornell 2002)."""
     records = motions()
@@ -77,7 +68,7 @@ def test_a_linear_models_ida_curve_is_a_straight_line_through_the_origin():
     at every level of a record (a straight line through the origin), to round-off."""
     records = motions()
     levels = [0.1, 0.4, 1.6, 6.4]
-    res = nvib.ida(linear_two_storeys(records[0]), records, levels, im="sa", period=0.3,
+    res = nvib.ida(two_storeys(records[0], a=0.0), records, levels, im="sa", period=0.3,
                    scheme=nvib.Newmark(), dt=2e-3, progress=False)
     slope = res.measure / np.asarray(levels)[None, :]
     np.testing.assert_allclose(slope, slope[:, :1] * np.ones_like(slope), rtol=1e-9)

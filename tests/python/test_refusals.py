@@ -14,16 +14,7 @@ from nvib import GroundMotion
 from nvib.analysis import spectrum as spectrum_module
 
 from _cli import run_cli
-
-
-def two_storeys(signal=None):
-    t = np.arange(400) * 0.005
-    signal = signal if signal is not None else GroundMotion.from_array(np.sin(5 * t) * np.exp(-t), dt=0.005, name="d")
-    return nvib.Model([1e3, 1e3], dofs=["x1", "x2"], effects=[
-        {"type": "hardening_spring", "name": "storey1", "measure": {"x1": 1.0}, "k0": 4e5, "a": 50.0},
-        {"type": "hardening_spring", "name": "storey2", "measure": {"x2": 1.0, "x1": -1.0}, "k0": 3e5, "a": 50.0},
-        {"type": "damper", "name": "d1", "measure": {"x1": 1.0}, "c": 500.0},
-        {"type": "ground_acceleration", "name": "ground", "signal": signal}])
+from test_batch import two_storeys
 
 
 def oscillator():
