@@ -330,17 +330,19 @@ class GroundMotion:
     def psa(self, periods, damping: float = 0.05):
         """The exact pseudo-spectral acceleration w^2 Sd at ``periods`` [s] (an array like them), in the
         record's units, with the free vibration after the record (nvib._core.elastic_spectrum)."""
+        periods = _checks.real_array("periods", periods)  # their values and damping's: the kernel's checks
+        out = self.exact_response(np.atleast_1d(periods).ravel(), _checks.number("damping", damping))
+        return np.asarray(out["PSa"], dtype=float).reshape(periods.shape)
+
+    def exact_response(self, periods, damping) -> dict:
+        """The kernel's exact elastic spectrum of this record (a dict of Sd, Sv, PSv, PSa, Sa, ...: see
+        nvib._core.elastic_spectrum) at ``periods`` for one damping ratio or several; the evenly sampled
+        form when the samples are evenly spaced."""
         from . import _core
 
-        periods = _checks.real_array("periods", periods)  # their values and damping's: the kernel's checks
-        damping = _checks.number("damping", damping)
-        flat = np.atleast_1d(periods).ravel()
-        dt = self.dt
-        if dt is not None:
-            out = _core.elastic_spectrum(self.a, dt, flat, damping, t0=float(self.t[0]))
-        else:
-            out = _core.elastic_spectrum_at(self.t, self.a, flat, damping)
-        return np.asarray(out["PSa"], dtype=float).reshape(periods.shape)
+        if self.dt is not None:
+            return _core.elastic_spectrum(self.a, self.dt, periods, damping, t0=float(self.t[0]))
+        return _core.elastic_spectrum_at(self.t, self.a, periods, damping)
 
     def scaled_to_sa(self, period: float, value: float, damping: float = 0.05) -> tuple[GroundMotion, float]:
         """(the record scaled so that its pseudo-spectral acceleration at ``period`` [s] is ``value`` (in

@@ -39,6 +39,7 @@ FLOATS = {"rayleigh": ["zeta"], "rayleigh_coefficients": ["zeta"], "solve_many":
           "stability.damping_ratio": ["omega_h"], "stability.period_error": ["omega_h"],
           "stability.principal_eigenvalue": ["omega_h"], "stability.spectral_radius": ["omega_h"],
           "stability.amplification_matrix": ["omega_h"], "GroundMotion.scaled": ["factor"],
+          "GroundMotion.exact_response": ["damping"],
           "default_max_displacement": ["duration"]}
 
 # Inf is a documented value here ("no limit"); NaN is still refused.
@@ -95,6 +96,7 @@ def calls(files) -> dict:
                                                                        "dt": 0.01}), {}),
         "GroundMotion.signal": (record.signal, (), {}),
         "GroundMotion.psa": (record.psa, ([0.5, 1.0],), {}),
+        "GroundMotion.exact_response": (record.exact_response, ([0.5, 1.0], 0.05), {}),
         "GroundMotion.scaled_to_sa": (record.scaled_to_sa, (0.5, 0.3), {}),
         "Model": (nvib.Model, ([1.0],), {}),
         "Model.evaluate_force": (osc.evaluate_force, ([0.1], [0.0]), {}),

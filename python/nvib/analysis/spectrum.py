@@ -227,12 +227,7 @@ def spectrum(record: GroundMotion, periods, *, damping=0.05, scheme=None, law: d
                                                 "the record followed as long as its peak can grow): "
                                                 f"{name} applies to runs with a scheme= or a law=")
         start = time.perf_counter()
-        if record.dt is not None:
-            out = _core.elastic_spectrum(record.a, record.dt, periods, dampings if dampings.ndim else float(dampings),
-                                         t0=float(record.t[0]))
-        else:
-            out = _core.elastic_spectrum_at(record.t, record.a, periods,
-                                            dampings if dampings.ndim else float(dampings))
+        out = record.exact_response(periods, dampings if dampings.ndim else float(dampings))
         wall = time.perf_counter() - start
         bad = ~np.isfinite(out["Sa"]) | ~np.isfinite(out["Sd"])
         if np.any(bad):
