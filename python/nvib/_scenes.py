@@ -20,7 +20,7 @@ else:  # pragma: no cover
 
 SCENE_DIR = os.path.join(os.path.dirname(__file__), "scenes")
 _SCENE_KEYS = {"name", "title", "source", "t_end", "dt", "plot_dof", "record", "collapse_deformation"}
-_TOP_KEYS = {"scene", "dofs", "initial", "effect", "damping"}
+_TOP_KEYS = {"scene", "dofs", "initial", "effect", "damping", "storeys"}
 MAX_SCENE_BYTES = 64 * 2**20  # a scene file larger than this is refused before it is read
 
 
@@ -306,4 +306,24 @@ def scene_from_dict(data: dict, *, path: str = "<scene>", without=(), ground_mot
     }
     if model.scene["plot_dof"] not in names:
         raise SceneError(f"{path}: [scene] plot_dof: unknown DOF {model.scene['plot_dof']!r}")
+    model.scene["storeys"] = _scene_storeys(path, model, data.get("storeys"))
     return model
+
+
+def _scene_storeys(path: str, model: Model, storeys) -> dict | None:
+    """[storeys] storey1 = 3.5, ...: the effects whose measure is a storey drift, with their heights [m]
+    (for drift ratios). Storeys left out with ``without`` are dropped."""
+    if storeys is None:
+        return None
+    from ._storeys import storey_heights
+
+    kept = {e.name for e in model.effects or [] if e.name}
+    if not isinstance(storeys, dict):
+        raise SceneError(f"{path}: [storeys]: expected a table of effect name = storey height [m]", key="storeys")
+    storeys = {k: v for k, v in storeys.items() if k in kept or not model.without}
+    if not storeys:  # every storey left out
+        return None
+    try:
+        return storey_heights(model, storeys, argument="[storeys]")
+    except (ValueError, TypeError) as exc:
+        raise SceneError(f"{path}: {exc}", key="storeys") from None
