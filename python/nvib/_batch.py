@@ -29,7 +29,7 @@ from ._model import Model
 from ._progress import ProgressBar
 from ._records import GroundMotion
 from . import _core
-from ._core import StopToken
+from ._core import ArgumentError, StopToken
 from ._solve import Status, _solve, check_option_names, check_settings, solve
 
 __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
@@ -248,8 +248,10 @@ def _summary(model: Model, res, label: dict, layout=None) -> RunSummary:
                       err, res.stats, res.stats.wall_time)
 
 
-def _run_one(model, motion, scale, changes, label, scheme, keep, options):
-    """One run; never raises for the run's own failure (bad input gives a RunError)."""
+def _run_one(model, motion, scale, changes, label, scheme, own, keep, options):
+    """One run (``own``: the options of this run alone, such as its t_end); never raises for the run's own
+    failure (bad input gives a RunError)."""
+    options = {**options, **own} if own else options
     try:
         m = _derived(model, motion, scale, changes) if (motion is not None or scale != 1.0 or changes) else model
         if keep == "peaks":
@@ -466,7 +468,8 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     its ground accelerations' signal) and/or ``scales`` (factors on that signal: an IDA's intensity
     levels; every motion at every scale) and/or ``variations`` ({"storey1.k0": [values...], ...}: run k
     sets every listed parameter of the named effect to its k-th value; with motions and scales, every
-    combination). ``scheme``: one scheme, or a list of one per run. ``keep``: "history" (each run's
+    combination). ``scheme``: one scheme, or a list of one per run; ``t_end`` likewise (one end time, or a
+    list of one per run: each record to its own end). ``keep``: "history" (each run's
     Result) or "peaks" (a RunSummary: memory stays bounded for 10^5 runs; the peaks are tracked over every
     step while the run saves only every ``save_every``-th state, by default at most 1000 states, and drops them). ``threads``: worker threads
     (default: every core); models that call Python go to as many processes instead (``processes=True``
@@ -479,8 +482,20 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     if keep not in ("history", "peaks"):
         raise _checks.value_error("keep", f"expected 'history' or 'peaks', got {keep!r}")
     _check_options(options, keep)
-    dt, t_end = _checks.number("dt", dt), _checks.number("t_end", t_end)
-    _core.run_steps(_checks.number("t0", options.get("t0", 0.0)), t_end, dt)  # the core's checks, once for all
+    dt = _checks.number("dt", dt)
+    t0 = _checks.number("t0", options.get("t0", 0.0))
+    own_ends = None
+    if isinstance(t_end, (list, tuple, np.ndarray)):  # one per run
+        own_ends = [_checks.number(f"t_end[{k}]", x) for k, x in enumerate(t_end)]
+        for k, x in enumerate(own_ends):
+            try:
+                _core.run_steps(t0, x, dt)
+            except ArgumentError as exc:
+                raise _checks.value_error(f"t_end[{k}]", exc.reason) from None
+        t_end = max(own_ends) if own_ends else 0.0
+    else:
+        t_end = _checks.number("t_end", t_end)
+        _core.run_steps(t0, t_end, dt)  # the core's checks, once for all
     if threads is not None:
         threads = _checks.integer("threads", threads, minimum=1, maximum=None)
     if processes is not None:
@@ -489,13 +504,15 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     schemes = list(scheme) if isinstance(scheme, (list, tuple)) else [scheme] * len(runs)
     if len(schemes) != len(runs):
         raise _checks.value_error("scheme", f"expected one scheme or {len(runs)} (one per run), got {len(schemes)}")
+    if own_ends is not None and len(own_ends) != len(runs):
+        raise _checks.value_error("t_end", f"expected one end time or {len(runs)} (one per run), got {len(own_ends)}")
     options = {**options, "dt": dt, "t_end": t_end}
     labels = []
     items = []
-    for (m, g, s, changes, label), sc in zip(runs, schemes):
+    for k, ((m, g, s, changes, label), sc) in enumerate(zip(runs, schemes)):
         label = {**label, "scheme": scheme_label(sc)}
         labels.append(label)
-        items.append((m, g, s, changes, label, sc))
+        items.append((m, g, s, changes, label, sc, {"t_end": own_ends[k]} if own_ends is not None else {}))
     workers = threads if threads is not None else max(1, os.cpu_count() or 1)
     uses_python = any(item[0]._core.has_python for item in items)
     if client is None and (workers > 1 or processes) and (processes if processes is not None else uses_python):

@@ -197,3 +197,15 @@ def test_dask_local_cluster_gives_the_same_results():
     assert remote.labels == local.labels
     for a, b in zip(local, remote):
         same(a, b)
+
+
+def test_each_run_may_have_its_own_end_time():
+    base = two_storeys()
+    ends = [0.3, 0.7]
+    batch = nvib.solve_many(base, nvib.CEMDTS(), dt=1e-3, t_end=ends, ground_motions=motions(), progress=False)
+    for gm, end, res in zip(motions(), ends, batch):
+        same(res, nvib.solve(two_storeys(gm), nvib.CEMDTS(), dt=1e-3, t_end=end))
+    for t_end, arg in (([0.3], "t_end"), ([0.3, -1.0], "t_end[1]"), ([0.3, float("nan")], "t_end[1]")):
+        with pytest.raises(nvib.ArgumentError) as exc:
+            nvib.solve_many(base, nvib.CEMDTS(), dt=1e-3, t_end=t_end, ground_motions=motions(), progress=False)
+        assert exc.value.argument == arg

@@ -79,9 +79,13 @@ def calls(files) -> dict:
     run = dict(dt=0.01, t_end=0.1)
     rows = files["rows"]
     # an IDA's table as nvib.ida makes it (two records, three scales, one collapse), without the runs
-    ida = nvib.IDA(["a", "b"], np.array([1.0, 2.0, 3.0]), "peak_drift",
-                   np.array([[0.01, 0.03, np.inf], [0.025, 0.015, 0.04]]),
-                   np.array([[False, False, True], [False, False, False]]), {}, "CEMDTS")
+    levels, none = np.array([1.0, 2.0, 3.0]), [""] * 3
+    curves = [nvib.analysis.ida.Curve(name, levels, np.array(d), np.isinf(d), [""] * 2 + [cause], levels,
+                                      np.full(3, np.nan), none, none, np.where(np.isinf(d), np.nan, d))
+              for name, d, cause in (("a", [0.01, 0.03, np.inf], "strength lost"), ("b", [0.025, 0.015, 0.04], ""))]
+    measure = np.vstack([c.demand for c in curves])
+    ida = nvib.IDA(["a", "b"], curves, levels, measure, np.isinf(measure), "peak storey drift", "m",
+                   "scale factor of the records", "-", "CEMDTS", 0.01, None, [], 6, 0.0)
     return {
         "CEMDTS": (nvib.CEMDTS, (), {}), "CentralDifference": (nvib.CentralDifference, (), {}),
         "GeneralizedAlpha": (nvib.GeneralizedAlpha, (), {}), "Newmark": (nvib.Newmark, (), {}),
@@ -119,7 +123,8 @@ def calls(files) -> dict:
         "drive": (nvib.drive, ({"type": "spring", "k": 2.0}, [0.0, 0.1]), {}),
         "estimate": (nvib.estimate, (osc, nvib.Newmark()), dict(run)),
         "expm": (nvib.expm, (np.eye(2),), {}),
-        "ida": (nvib.ida, (model, [record], [1.0]), {"dt": 0.01, "t_end": 0.2, "progress": False}),
+        "ida": (nvib.ida, (model, [record], [1.0]), {"dt": 0.01, "im": "scale", "measure": "peak_drift",
+                                                     "check": False, "progress": False}),
         "load_result": (nvib.load_result, (files["res"],), {}),
         "load_scene": (nvib.load_scene, ("pendulum",), {}),
         "rayleigh": (nvib.rayleigh, (osc,), {"zeta": 0.05, "omegas": [5.0, 20.0]}),

@@ -257,15 +257,16 @@ def small_ida():
     for start in (0, 4, 8, 12, 16):
         i = int(round(start / gm.dt))
         records.append(nvib.GroundMotion.from_array(gm.a[i:i + 1200], dt=gm.dt, name=f"SGM-1 from {start} s"))
-    return nvib.ida(model, records, [0.3, 0.6, 0.9, 1.2], dt=0.002, t_end=12.0, progress=False)
+    return nvib.ida(model, records, [0.3, 0.6, 0.9, 1.2], im="scale", dt=0.002, tail=0.0, check=False,
+                    progress=False)
 
 
 def test_from_ida_collapse_fragility_reads_each_records_first_collapse(small_ida):
     ida = small_ida
     assert ida.collapsed.any() and not ida.collapsed.all(axis=1).all()
     f = fragility.from_ida(ida)
-    first = [ida.scales[np.argmax(row)] for row in ida.collapsed if row.any()]
-    never = [ida.scales.max() for row in ida.collapsed if not row.any()]
+    first = [ida.levels[np.argmax(row)] for row in ida.collapsed if row.any()]
+    never = [ida.levels.max() for row in ida.collapsed if not row.any()]
     assert sorted(f.collapse_ims) == sorted(first) and list(f.censored_ims) == never
     assert f.method == ("truncated" if never else "collapse IM values") and f.event == "collapse"
     assert f.im_name == "scale factor of the records" and f.im_unit == "-"
@@ -275,13 +276,13 @@ def test_from_ida_collapse_fragility_reads_each_records_first_collapse(small_ida
 
 def test_from_ida_exceedance_fragility_counts_the_ida(small_ida):
     ida = small_ida
-    limit = 0.02
+    limit = 0.6  # % drift ratio
     f = fragility.from_ida(ida, demand_limit=limit)
     exceeded = ida.collapsed | (ida.measure > limit)
-    np.testing.assert_array_equal(f.levels, ida.scales)
-    np.testing.assert_array_equal(f.n, [len(ida.records)] * ida.scales.size)
+    np.testing.assert_array_equal(f.levels, ida.levels)
+    np.testing.assert_array_equal(f.n, [len(ida.records)] * ida.levels.size)
     np.testing.assert_array_equal(f.z, exceeded.sum(axis=0))
-    assert f.event == f"{ida.measure_name} > 0.02" and f.method == "multiple stripes"
+    assert f.event == f"{ida.measure_name} > 0.6 %" and f.method == "multiple stripes"
     p = f.probability(np.linspace(0, 3, 200))
     assert np.all(np.diff(p) >= 0)
     # a limit the data separate (nothing exceeds it below one level, everything above) is refused naming it
@@ -298,9 +299,9 @@ def test_from_ida_reads_the_intensity_measure_of_an_ida_on_sa():
     starts = [int(round(s / gm.dt)) for s in (0, 4, 8, 12, 16)]
     records = [nvib.GroundMotion.from_array(gm.a[i:i + 1200] * nvib.STANDARD_GRAVITY, dt=gm.dt, units="m/s^2",
                                             name=f"SGM-1 from {i}") for i in starts]
-    ida = nvib.ida(model, records, [2.0, 4.0, 8.0, 16.0], im="sa", period=0.8, dt=0.002, t_end=12.0,
+    ida = nvib.ida(model, records, [2.0, 4.0, 8.0, 16.0], im="sa", period=0.8, dt=0.002, tail=0.0, check=False,
                    progress=False)
     f = fragility.from_ida(ida)
     assert f.im_label == "Sa(T1 = 0.8 s, 5 %) [m/s^2]"
-    first = [ida.scales[np.argmax(row)] for row in ida.collapsed if row.any()]
+    first = [ida.levels[np.argmax(row)] for row in ida.collapsed if row.any()]
     assert sorted(f.collapse_ims) == sorted(first) and len(first) >= 2

@@ -122,7 +122,7 @@ def test_batch_objects_round_trip():
                                 progress=False,
                                 dt=1e-3, t_end=0.5)
     spectrum = nvib.spectrum(motions()[0], [0.2, 1.0])
-    ida = nvib.ida(base, motions(), [1.0, 2.0], dt=1e-3, progress=False)
+    ida = nvib.ida(base, motions(), [1.0, 2.0], im="scale", measure="peak_drift", dt=1e-3, progress=False)
     for obj in (summaries, summaries[0], summaries[1], spectrum, ida, nvib.Newton(rtol=1e-9, iteration="modified")):
         for other in round_trips(obj):
             assert type(other) is type(obj) and same_state(other, obj)

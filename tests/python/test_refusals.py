@@ -162,12 +162,12 @@ def test_a_spectrum_whose_error_is_not_finite_misses_its_accuracy(monkeypatch):
 def test_ida_checks_its_measure_before_any_run(monkeypatch):
     model = two_storeys()
     # every run of this diverges (the central difference far beyond its stable step)
-    refused(nvib.ArgumentError, "measure", nvib.ida, model, [_record()], [1.0, 2.0], scheme=nvib.CentralDifference(),
-            dt=0.5, t_end=20.0, measure="bogus", progress=False)
-    message = refused(nvib.ArgumentError, "measure", nvib.ida, model, [_record()], [1.0], dt=1e-3, t_end=0.1,
+    refused(nvib.ArgumentError, "measure", nvib.ida, model, [_record()], [1.0, 2.0], im="scale",
+            scheme=nvib.CentralDifference(), dt=0.5, tail=20.0, measure="bogus", progress=False)
+    message = refused(nvib.ArgumentError, "measure", nvib.ida, model, [_record()], [1.0], im="scale", dt=1e-3,
                       measure="storey3", progress=False)
     assert "storey1" in message
-    out = nvib.ida(model, [_record()], [1.0], dt=1e-3, t_end=0.5, measure="storey2", progress=False)
+    out = nvib.ida(model, [_record()], [1.0], im="scale", dt=1e-3, measure="storey2", progress=False)
     assert np.isfinite(out.measure).all()
 
 

@@ -108,7 +108,8 @@ class Fragility:
         if self.levels is not None:
             data = f"{self.levels.size} stripes, {int(self.n.sum())} runs, {int(self.z.sum())} exceeded"
         else:
-            data = f"{self.collapse_ims.size} collapsed, {self.censored_ims.size} censored"
+            reached = "collapsed" if self.event == "collapse" else "reached"
+            data = f"{self.collapse_ims.size} {reached}, {self.censored_ims.size} censored"
         return (f"| {self.event} | {self.method} | {self.im_label} | {self.theta:.4g} | {self.se_theta:.2g} | "
                 f"{self.beta:.4f} | {self.se_beta:.2g} | {data} |")
 
@@ -158,11 +159,12 @@ class Fragility:
             xs = np.sort(self.collapse_ims)
             ecdf = np.arange(1, xs.size + 1) / total
             ax.step(np.concatenate([[0.0], xs]), np.concatenate([[0.0], ecdf]), where="post", color="C0", lw=1)
-            ax.plot(xs, ecdf, "o", color="C0", ms=5, zorder=3, label=f"collapse IMs, empirical CDF ({total} records)")
+            what = "collapse" if self.event == "collapse" else "exceedance"
+            ax.plot(xs, ecdf, "o", color="C0", ms=5, zorder=3, label=f"{what} IMs, empirical CDF ({total} records)")
             top = float(xs.max())
             if self.censored_ims.size:
                 ax.plot(self.censored_ims, np.full(self.censored_ims.size, ecdf[-1]), ">", color="C3", ms=7,
-                        label=f"no collapse up to this IM ({self.censored_ims.size})")
+                        label=f"no {what} up to this IM ({self.censored_ims.size})")
                 top = max(top, float(self.censored_ims.max()))
         top = max(top, float(self.theta * math.exp(2.0 * self.beta)))
         x = np.linspace(0.0, 1.15 * top, 400)
@@ -404,57 +406,48 @@ def fit_stripes(ims, n, z, *, im_name: str = "IM", im_unit: str = "", event: str
 
 # ---- from an incremental dynamic analysis -------------------------------------------------------------
 
-def _ida_intensity(ida):
-    """The IDA's intensity per record and level [record, level], its name and unit: its levels, which are
-    the values of its intensity measure (Sa(T1), PGA, ...: ``ida(im=...)``) or else its scale factors."""
-    values = np.broadcast_to(np.asarray(ida.scales, dtype=float), (len(ida.records), len(ida.scales)))
-    if ida.factors is None:
-        return values, "scale factor of the records", "-"
-    return values, ida.im_name, ida.im_unit
-
-
 def from_ida(ida, *, demand_limit: float | None = None) -> Fragility:
     """A fragility from an incremental dynamic analysis (``nvib.ida``), the IM being the IDA's intensity
-    (its intensity measure, such as Sa(T1), or the records' scale factor).
+    measure (Sa(T1), PGA, a scale factor ...).
 
-    Without ``demand_limit``: the collapse fragility, from each record's first collapsing intensity;
-    a record that never collapsed is censored at the highest intensity it was run at
-    (``fit_collapse_ims``). With ``demand_limit`` (in the units of the IDA's measure): the fragility of
-    the measure exceeding it, from the number of records exceeding it at each intensity level, a
-    collapse counted as an exceedance (``fit_stripes``)."""
+    Without ``demand_limit``: the collapse fragility, from each record's first collapsing intensity (traced
+    by hunt and fill, within the IDA's tolerance of its capacity); a record that never collapsed is censored
+    at the highest intensity it was run at (``fit_collapse_ims``). With ``demand_limit`` (in the units of
+    the IDA's measure, % for a drift ratio): the fragility of the demand exceeding it, a collapse counted as
+    an exceedance: from each traced curve's intensity where the demand reaches the limit (interpolated
+    between its runs; censored at its highest run when it never does), or for stripes from the number of
+    records exceeding it at each level (``fit_stripes``)."""
     from .ida import IDA
 
     if not isinstance(ida, IDA):
         raise _checks.type_error("ida", f"expected an IDA (nvib.ida's result), got {type(ida).__name__}")
     if demand_limit is not None:
         demand_limit = _checks.real("demand_limit", demand_limit, positive=True)
-    im, name, unit = _ida_intensity(ida)
-    measure = np.asarray(ida.measure, dtype=float)
-    collapsed = np.asarray(getattr(ida, "collapsed", np.isinf(measure)), dtype=bool) | np.isinf(measure)
-    if np.any(im <= 0):
+    name, unit = ida.im_name, ida.im_unit
+    if any(np.any(c.im <= 0) for c in ida.curves):
         raise _checks.value_error("ida", "its intensities must be > 0 for a lognormal fragility")
     if demand_limit is None:
-        first, censored = [], []
-        for i in range(im.shape[0]):
-            order = np.argsort(im[i], kind="stable")
-            hit = collapsed[i, order]
-            if hit.any():
-                first.append(im[i, order][np.argmax(hit)])
-            else:
-                censored.append(im[i].max())
+        first = [c.collapse_im for c in ida.curves if np.isfinite(c.collapse_im)]
+        censored = [float(c.im.max()) for c in ida.curves if not np.isfinite(c.collapse_im)]
         if not first:
             raise _checks.value_error("ida", "no record collapsed at any intensity: there is no collapse "
                                              "fragility to fit (raise the intensities)")
         return fit_collapse_ims(first, censored=censored, im_name=name, im_unit=unit, event="collapse")
-    exceeded = collapsed | (measure > demand_limit)
-    measure_name = str(getattr(ida, "measure_name", "demand"))
-    measure_unit = str(next((getattr(ida, k) for k in ("measure_unit", "demand_unit") if getattr(ida, k, None)), ""))
-    limit = f"{demand_limit:g}" + (f" {measure_unit}" if measure_unit else "")
-    # runs grouped by their intensity: the stripes (one per level when every record ran at the same ones)
-    levels, index = np.unique(im.ravel(), return_inverse=True)
-    n = np.bincount(index, minlength=levels.size)
-    z = np.bincount(index, weights=exceeded.ravel().astype(float), minlength=levels.size)
+    limit = f"{demand_limit:g}" + (f" {ida.measure_unit}" if ida.measure_unit else "")
+    event = f"{ida.measure_name} > {limit}"
     try:
-        return fit_stripes(levels, n, z, im_name=name, im_unit=unit, event=f"{measure_name} > {limit}")
+        if ida.tolerance is not None:  # traced curves: the intensity where each reaches the limit
+            reached = [c.im_at(demand_limit) for c in ida.curves]
+            ims = [x for x in reached if np.isfinite(x)]
+            censored = [float(c.im.max()) for c, x in zip(ida.curves, reached) if not np.isfinite(x)]
+            if not ims:
+                raise _checks.value_error("demand_limit", f"no record reached {limit}: raise the intensities")
+            return fit_collapse_ims(ims, censored=censored, im_name=name, im_unit=unit, event=event)
+        exceeded = ida.collapsed | (ida.measure > demand_limit)
+        n = np.full(ida.levels.size, len(ida.records))
+        return fit_stripes(ida.levels, n, exceeded.sum(axis=0).astype(float), im_name=name, im_unit=unit,
+                           event=event)
     except _checks.ArgumentError as exc:
+        if exc.argument == "demand_limit":
+            raise
         raise _checks.value_error("demand_limit", f"at {limit}, {exc.reason}") from None

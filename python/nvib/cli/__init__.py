@@ -7,6 +7,8 @@
     nvib stability [options]         spectral radius and stability limit of schemes on a linear SDOF
     nvib paper OUTDIR                the figures and tables of Yang et al. (2017), and CEMDTS's eta study
     nvib spectrum RECORD [options]   response spectrum of a ground-motion record
+    nvib ida SCENE RECORDS [options] incremental dynamic analysis to collapse
+    nvib fragility FILE [options]    lognormal fragility curves from an IDA or from stripes
     nvib --cmake-dir                 the folder of nvibConfig.cmake (nvib_DIR for find_package(nvib))
     nvib --include-dir               the folder of nvib's C++ headers
     nvib --cflags                    -I<nvib headers> -I<Eigen headers>, for a compiler command line
@@ -25,7 +27,7 @@ import argparse
 import os
 import sys
 
-from . import cost, demo, paper, run, scenes, spectrum, stability
+from . import cost, demo, fragility, ida, paper, run, scenes, spectrum, stability
 
 __all__ = ["build_parser", "main"]
 
@@ -50,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--cflags", action="store_true",
                         help="print the compiler flags for nvib's and Eigen's headers (-I<nvib> -I<eigen>) and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for command in (scenes, run, cost, paper, demo, stability, spectrum):
+    for command in (scenes, run, cost, paper, demo, stability, spectrum, ida, fragility):
         command.add_parser(sub)
     return parser
 
