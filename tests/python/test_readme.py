@@ -79,6 +79,13 @@ def user_files(folder: Path) -> None:
     (folder / "two_storey.toml").write_text(scene_file(text), encoding="utf-8")
 
 
+def ida_file(path: Path) -> None:
+    """An IDA's CSV as nvib ida --out writes it: building_collapse under two 12-s windows of SGM-1."""
+    gm = nvib.GroundMotion.from_at2(Path(nvib.__file__).parent / "scenes" / "records" / "sgm1.AT2")
+    windows = [nvib.GroundMotion.from_array(gm.a[i:i + 1200], dt=gm.dt, units="g", name=f"from {i}") for i in (0, 600)]
+    nvib.ida(nvib.load_scene("building_collapse"), windows, dt=0.002, check=False, progress=False).to_csv(path)
+
+
 EXAMPLES = shell_examples(README.read_text(encoding="utf-8")) if README.is_file() else []
 
 
@@ -94,6 +101,8 @@ def test_shell_example_exits_as_the_readme_says(command, status, shown, tmp_path
     from _cli import run_cli
 
     user_files(tmp_path)
+    if command.startswith("nvib fragility ida.csv"):  # the IDA file an nvib ida --out before it wrote
+        ida_file(tmp_path / "ida.csv")
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(capsys, *command.split()[1:])
     assert code == status, f"{command}: exit status {code}, the README says {status}\n{out[-2000:]}{err[-2000:]}"
