@@ -358,21 +358,23 @@ def _envelope_panel(ax, heights: dict, peaks: dict, critical: str | None, limits
     for k, (label, ratio) in enumerate(limits):
         lx, ly = _step_profile(100.0 * ratio, levels)
         ax.plot(lx, ly, ls="--" if k == 0 else ":", color="C3", lw=1.2, label=label)
+    ax.set_ylim(0.0, levels[-1])
+    right = 1.15 * max([np.nanmax(r)] + [np.nanmax(100 * q) for _, q in limits]) if np.any(np.isfinite(r)) else 1.0
+    ax.set_xlim(0.0, right)
     if critical is not None:
         j = names.index(critical)
         failed = collapse is not None and collapse[1].startswith(critical + " ")
         ax.plot(r[j], mids[j], "o", color="C3", ms=8, zorder=3)
+        inward = -1 if r[j] > 0.5 * right else 1  # the label on the side with room
         ax.annotate(f"{critical}: {r[j]:.3g} %" + (" (failed)" if failed else ""), (r[j], mids[j]),
-                    xytext=(-8, 10), textcoords="offset points", ha="right", fontsize=9, color="C3",
-                    bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.8})
-    ax.set_ylim(0.0, levels[-1])
-    ax.set_xlim(left=0.0, right=1.15 * max([np.nanmax(r)] + [np.nanmax(100 * q) for _, q in limits]
-                                           if np.any(np.isfinite(r)) else [1.0]))
+                    xytext=(8 * inward, 10), textcoords="offset points", ha="right" if inward < 0 else "left",
+                    fontsize=9, color="C3", bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none",
+                                                  "alpha": 0.8})
     if len(levels) <= 16:
         ax.set_yticks(levels)
-        right = ax.secondary_yaxis("right")
-        right.set_yticks(mids, labels=names, fontsize=8)
-        right.tick_params(length=0)
+        names_axis = ax.secondary_yaxis("right")
+        names_axis.set_yticks(mids, labels=names, fontsize=8)
+        names_axis.tick_params(length=0)
     ax.set_xlabel("peak |drift| / storey height [%]")
     ax.set_ylabel("height above the ground [m]")
     title = "Peak drift ratio over the height"
@@ -381,8 +383,8 @@ def _envelope_panel(ax, heights: dict, peaks: dict, critical: str | None, limits
     if saved_every > 1:
         title += f"\n(from the states saved every {saved_every} steps)"
     ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8, loc="lower right" if critical is None or r[names.index(critical)] < 0.6 * np.nanmax(x)
-              else "upper right")
+    low = critical is not None and mids[names.index(critical)] < 0.5 * levels[-1]
+    ax.legend(fontsize=8, loc="upper right" if low else "lower right")  # away from the critical storey's label
     ax.grid(True, alpha=0.3)
 
 

@@ -220,3 +220,71 @@ def test_scenes_without_storeys_or_ground_keep_their_figure(scene, dof):
     assert titles[-2].startswith("Phase locus") and titles[-1].startswith("Energy")
     assert len(fig.axes) == 3 + (model.n > 1)
     assert tuple(fig.get_size_inches()) == (5.6 * 3, 4.8)
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """The (result, keyword arguments, figure) of each run figure nvib run draws in this test."""
+    import nvib.plot
+
+    drawn, real = [], nvib.plot.run_figure
+
+    def spy(result, model, dof, title=None, **kwargs):
+        fig = real(result, model, dof, title, **kwargs)
+        drawn.append((result, kwargs, fig))
+        return fig
+
+    monkeypatch.setattr(nvib.plot, "run_figure", spy)
+    return drawn
+
+
+def test_nvib_run_records_every_storey_for_its_figure(capsys, tmp_path, figures):
+    """--plot records all six storeys (the scene asks for storey1 alone) so that the loop drawn is the critical
+    storey's, whichever it is; the summary lists what was asked for, as without --plot."""
+    from _cli import run_cli
+
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--t-end", "3", "--plot", tmp_path / "b.png")
+    assert code == 0, err
+    res, kwargs, fig = figures[-1]
+    assert sorted(res.effects) == STOREYS
+    assert [ln.split()[0] for ln in out.splitlines() if ln.startswith("storey")] == ["storey1"]
+    critical = STOREYS[int(np.argmax(np.max(np.abs(_drifts(res)), axis=0)))]
+    assert _axes(fig, title=f"Critical storey {critical} (bilinear)").lines
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--t-end", "1", "--out", tmp_path / "b.npz")
+    assert code == 0 and list(nvib.load_result(tmp_path / "b.npz").effects) == ["storey1"]
+
+
+def test_nvib_run_leaves_the_storeys_unrecorded_past_its_memory_budget(capsys, tmp_path, figures, monkeypatch):
+    from _cli import run_cli
+    from nvib.cli import run
+
+    monkeypatch.setattr(run, "STOREY_RECORD_BYTES", 1e3)
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--t-end", "3", "--record-effect", "storey6",
+                             "--plot", tmp_path / "b.png")
+    assert code == 0, err
+    assert "note: --plot does not record the storeys (0.36 MB for 1501 saved states)" in err
+    res, _, fig = figures[-1]
+    assert list(res.effects) == ["storey6"]
+    assert "storey1 was not recorded" in _axes(fig, title="Critical storey storey1").texts[0].get_text()
+
+
+def test_nvib_run_under_a_record_scaled_to_sa_draws_that_record(capsys, tmp_path, figures):
+    """--record FILE --sa T1 VALUE: the ground panel draws the record as scaled, in g (the file's unit), and the
+    title names it in place of the scene's own."""
+    from _cli import run_cli
+    from test_records import northridge_like
+
+    path = northridge_like(tmp_path)
+    code, out, err = run_cli(capsys, "run", "building_inelastic", "--record", path, "--sa", "0.9", "0.5", "--t-end",
+                             "2", "--plot", tmp_path / "sa.png")
+    assert code == 0, err
+    scaled, factor = GroundMotion.from_at2(path).scaled_to_sa(0.9, 0.5)
+    res, kwargs, fig = figures[-1]
+    assert kwargs["ground_units"] == "g"
+    assert fig.get_suptitle().startswith(f"building_inelastic under RSN1086_NORTHR_SYL360.AT2 x {factor:.4g}: "
+                                         "Sa(T1 = 0.9 s, 5 %) = 0.5 g\n")
+    ax = _axes(fig, ylabel="a_g [g]")
+    inside = scaled.t <= 2.0 + 1e-9
+    np.testing.assert_allclose(ax.lines[0].get_xdata(), scaled.t[inside])
+    np.testing.assert_allclose(ax.lines[0].get_ydata(), scaled.a[inside], rtol=1e-13)
+    assert f"PGA {scaled.pga:#.3g} g" in ax.get_title()
