@@ -288,3 +288,16 @@ def test_nvib_run_under_a_record_scaled_to_sa_draws_that_record(capsys, tmp_path
     np.testing.assert_allclose(ax.lines[0].get_xdata(), scaled.t[inside])
     np.testing.assert_allclose(ax.lines[0].get_ydata(), scaled.a[inside], rtol=1e-13)
     assert f"PGA {scaled.pga:#.3g} g" in ax.get_title()
+
+
+def test_drift_ratios_read_the_saved_columns():
+    """A result that saved x2 before x1 (and nothing else) still gives storey1 = x1 / h, storey2 = (x2 - x1) / h."""
+    from nvib._storeys import drift_ratio_histories, peak_drift_ratios
+
+    model = nvib.load_scene("building")
+    res = nvib.solve(model, nvib.CEMDTS(), dt=7e-4, t_end=0.3, dofs=["x2", "x1"])
+    heights = {"storey1": 3.5, "storey2": 2.0}
+    ratios = drift_ratio_histories(model, res, heights)
+    np.testing.assert_array_equal(ratios["storey1"], res.u[:, 1] / 3.5)
+    np.testing.assert_allclose(ratios["storey2"], (res.u[:, 0] - res.u[:, 1]) / 2.0, rtol=1e-14, atol=1e-18)
+    assert peak_drift_ratios(model, res, heights) == {k: float(np.max(np.abs(v))) for k, v in ratios.items()}
