@@ -34,8 +34,9 @@ def _signal_values(signal, t: np.ndarray) -> np.ndarray:
     return GroundMotion.from_spec("signal", signal)(t)
 
 
-def _ground_of(model: Model, dofs) -> list | None:
-    """[(r on the saved DOFs, signal)] of the model's ground accelerations (single effects), or None."""
+def ground_motions(model: Model) -> list[tuple[str, np.ndarray, object]]:
+    """[(name, r over the model's DOFs, signal)] of the model's ground accelerations (single effects, not left
+    out): P = -M r a_g(t) with a_g the signal (a GroundMotion or a sine/table/record dict) as the run sees it."""
     effects = model._init[1].get("effects") or []
     out = []
     for e in effects:
@@ -48,8 +49,14 @@ def _ground_of(model: Model, dofs) -> list | None:
             r = np.zeros(model.n)
             for key, c in e["measure"].items():
                 r[model._dof_index("measure", key)] += float(c)
-        out.append((r[np.asarray(dofs, dtype=int)], e.get("signal")))
-    return out or None
+        out.append((str(e.get("name") or ""), r, e.get("signal")))
+    return out
+
+
+def _ground_of(model: Model, dofs) -> list | None:
+    """[(r on the saved DOFs, signal)] of the model's ground accelerations (single effects), or None."""
+    cols = np.asarray(dofs, dtype=int)
+    return [(r[cols], signal) for _, r, signal in ground_motions(model)] or None
 
 
 ENERGY_WARNING = 0.05

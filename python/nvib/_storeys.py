@@ -55,10 +55,29 @@ def max_drift_ratio(peaks: dict, heights: dict) -> tuple[float, str]:
 
 
 def drift_ratio_histories(model, result, heights: dict) -> dict[str, np.ndarray]:
-    """{storey: drift ratio at each saved state} of a Result (the drift is the storey effect's measure)."""
+    """{storey: drift ratio (drift / height, dimensionless) at each saved state} of a Result (the drift is the
+    storey effect's measure, from the saved DOFs). Refused, naming ``result``, when the result did not save a
+    DOF that a storey's drift needs."""
     effects = {e.name: e for e in model.effects or [] if e.name}
+    column = {int(k): j for j, k in enumerate(result.dof_indices)}
+    u = np.asarray(result.u)
     out = {}
     for name, h in heights.items():
         e = effects[name]
-        out[name] = (result.u[:, list(e.index)] @ np.asarray(e.coef, dtype=float)) / h
+        missing = [model.dofs[int(i)] for i in e.index if int(i) not in column]
+        if missing:
+            raise _checks.value_error("result", f"the drift of {name!r} needs {missing[0]!r}, which this result did "
+                                                "not save")
+        out[name] = (u[:, [column[int(i)] for i in e.index]] @ np.asarray(e.coef, dtype=float)) / h
+    return out
+
+
+def peak_drift_ratios(model, result, heights: dict) -> dict[str, float]:
+    """{storey: peak |drift ratio| over the saved states} of a Result, in the order of ``heights`` (storey 1 at
+    the bottom): the drift ratio envelope. A history holding NaN gives NaN (never hidden); refused, naming
+    ``result``, as ``drift_ratio_histories``."""
+    out = {}
+    for name, r in drift_ratio_histories(model, result, heights).items():
+        r = np.abs(r)
+        out[name] = float(np.max(r)) if r.size else math.nan
     return out

@@ -33,7 +33,8 @@ def test_building_axes_say_relative_to_the_ground_but_a_drift_does_not():
     res = nvib.solve(model, nvib.CentralDifference(), dt=1e-3, t_end=2.0)
     titles = [t for t, _, _ in _labels(run_figure(res, model, "x1"))]
     assert titles[0] == "Displacement of x1 relative to the ground"
-    assert titles[1] == "Other DOFs relative to the ground"
+    assert titles[1].startswith("Ground acceleration") and "relative" not in titles[1]  # the ground's own, absolute
+    assert titles[2] == "Other DOFs relative to the ground"
     labels = _labels(run_figure(res, model, "x1", measure="storey2"))
     assert labels[0] == ("Measure storey2 (hardening_spring: d = x2 - x1)", "t [s]", "storey2 [m]")
     assert labels[-1][2] == "dstorey2/dt [m/s]" and "relative" not in labels[-1][0]

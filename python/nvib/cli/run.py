@@ -14,6 +14,7 @@ from .._io import FORMATS
 
 OUT_FORMATS = FORMATS
 MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
+STOREY_RECORD_BYTES = 256e6  # the most that recording the storeys for --plot may add to a run's memory
 RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
              "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof",
              "collapse_deformation": "--collapse-deformation", "record": "--record-effect", "energy": "--energy",
@@ -92,7 +93,10 @@ def add_parser(sub) -> None:
     g = p.add_argument_group("output")
     g.add_argument("--out", metavar="FILE", help=f"write the history to FILE{' or FILE'.join(OUT_FORMATS)} "
                                                  "(.nc: netCDF, needs xarray)")
-    g.add_argument("--plot", metavar="PNG", help="write histories, phase locus (and energy) to this PNG")
+    g.add_argument("--plot", metavar="PNG",
+                   help="write histories, phase locus (and energy) to this PNG; under a ground motion, a_g(t) below "
+                        "the response; for a scene with [storeys], the peak drift ratio over the height and the loop "
+                        "of the critical storey (every storey is then recorded, and --out holds them too)")
     g.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar on stderr for runs over a second (default: when stderr is a terminal)")
     p.set_defaults(func=lambda args, parser: c.run_checked(run, args, parser), subparser=p)
@@ -106,7 +110,8 @@ def effect_summary(model) -> str:
 
 
 def ground_motion(args):
-    """(the --record as given, scaled by --scale or to --sa, a line for the summary), or (None, None)."""
+    """(the --record as given, scaled by --scale or to --sa, a line for the summary, its name and scaling for
+    the figure's title), or (None, None, None)."""
     from .. import GroundMotion, RecordError
 
     record = args.ground_record
@@ -115,7 +120,7 @@ def ground_motion(args):
     if record is None:
         if given:
             raise c.Usage(given[0], "it applies to a --record; give --record FILE too")
-        return None, None
+        return None, None, None
     if not 0.0 <= args.sa_damping < 1.0:
         raise c.Usage("--sa-damping", f"expected 0 <= damping < 1, got {args.sa_damping:g}")
     try:
@@ -129,9 +134,11 @@ def ground_motion(args):
                                         "give --record-units g or m/s^2")
     text = f"{gm.label} ({gm.name}): {len(gm)} samples, " + (f"dt = {gm.dt:g} s, " if gm.dt else "") + \
         f"{gm.duration:g} s, PGA {gm.pga:.4g} {gm.units}"
+    figure = gm.name
     if args.scale is not None:
         gm = gm.scaled(args.scale)
         text += f"; scaled by {args.scale:g}: PGA {gm.pga:.4g} {gm.units}"
+        figure += f" x {args.scale:g}"
     elif args.sa is not None:
         period, value = args.sa
         before = float(gm.psa([period], args.sa_damping)[0])
@@ -141,7 +148,8 @@ def ground_motion(args):
             raise c.Usage("--sa", str(exc).removeprefix("period: ")) from None
         text += (f"; scaled by {factor:.6g} to Sa(T1 = {period:g} s, {100 * args.sa_damping:g} %) = {value:g} "
                  f"{gm.units} (was {before:.4g} {gm.units}): PGA {gm.pga:.4g} {gm.units}")
-    return gm, text
+        figure += f" x {factor:.4g}: Sa(T1 = {period:g} s, {100 * args.sa_damping:g} %) = {value:g} {gm.units}"
+    return gm, text, figure
 
 
 def load_model(args, ground=None):
@@ -166,7 +174,7 @@ def run(args) -> int:
     if args.plot is not None:
         c.check_output("--plot", args.plot, c.PLOT_FORMATS)
     scheme = c.make_scheme(args.scheme, args)
-    ground, ground_text = ground_motion(args)
+    ground, ground_text, ground_title = ground_motion(args)
     model = load_model(args, ground)
     args.ground_text = ground_text
     dof = args.dof if args.dof is not None else model.scene["plot_dof"]
@@ -202,6 +210,9 @@ def run(args) -> int:
     except (ValueError, OverflowError) as exc:
         raise step_error(exc, args, model) from None
     save_every = args.save_every if args.save_every is not None else max(1, math.ceil(n_steps / MAX_SAVED))
+    args.summary_records = list(record)
+    if args.plot and model.scene.get("storeys"):
+        record += storeys_to_record(model, record, n_steps // save_every + 1 + (n_steps % save_every != 0))
 
     for note in model.scene["notes"]:
         print(f"note: {note}", file=sys.stderr)
@@ -236,10 +247,12 @@ def run(args) -> int:
     if args.out and not write_out(res, model, t_end, save_every, args):
         code = 1
     if args.plot:
-        from ..plot import plot_run
+        from ..plot import default_title, plot_run
 
+        title = None if ground is None else default_title(res, model, ground=ground_title)
         try:
-            plot_run(res, model, dof, args.plot, measure=args.measure)
+            plot_run(res, model, dof, args.plot, title, measure=args.measure, collapse_deformation=collapse,
+                     ground_units=None if ground is None else ground.units)
             print(f"wrote {args.plot}")
         except OSError as exc:
             print(f"nvib run: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
@@ -249,6 +262,27 @@ def run(args) -> int:
         print(f"nvib run: error: {failure_line(res, scheme, dt)}{kept}", file=sys.stderr)
         return 1
     return code
+
+
+def storeys_to_record(model, record: list, n_saved: int) -> list[str]:
+    """The storeys --plot records beside ``record``: every one, so that the loop of the critical storey (known
+    only after the run) can be drawn, unless they would add more than STOREY_RECORD_BYTES (or a quarter of
+    the memory available) to the run: then none, with a note on stderr."""
+    from .. import _core
+
+    laws = _core.laws()
+    storeys = set(model.scene["storeys"])
+    extra = [e for e in model.effects or [] if e.name in storeys and e.name not in record and e.type in laws]
+    names = list(dict.fromkeys(e.name for e in extra))
+    per_state = sum(8.0 * (3 + len(laws[e.type]["state"])) for e in extra)  # measure, rate, force, state
+    need = per_state * n_saved
+    available = _core.available_memory()
+    if need <= STOREY_RECORD_BYTES and (available <= 0 or need <= 0.25 * available):
+        return names
+    print(f"note: --plot does not record the storeys ({need / 1e6:.3g} MB for {n_saved} saved states): the "
+          "figure draws the loop of the critical storey only if it is recorded (--record-effect NAME, or a larger "
+          "--save-every)", file=sys.stderr)
+    return []
 
 
 def write_out(res, model, t_end: float, save_every: int, args) -> bool:
@@ -350,8 +384,10 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
         rel = res.energy.relative_balance_error()
         lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D + H - W - E0| / max energy)"
                       if math.isfinite(rel) else "relative balance error: n/a (the energies overflowed)"))
+    asked = getattr(args, "summary_records", None)
     for name, rec in res.effects.items():
-        lines.append((name, effect_line(rec, res, model)))
+        if asked is None or name in asked:  # not the storeys recorded only for --plot
+            lines.append((name, effect_line(rec, res, model)))
     lines += [("warning", w) for w in res.warnings]
     w = max(len(k) for k, _ in lines)
     print("\n".join(f"{k:<{w}}  {v}" for k, v in lines))
