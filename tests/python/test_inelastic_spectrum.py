@@ -12,6 +12,7 @@ import pytest
 import nvib
 from nvib.analysis.inelastic import SEARCH_TOLERANCE
 
+from _cli import run_cli
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SGM1 = os.path.join(HERE, "..", "..", "python", "nvib", "scenes", "records", "sgm1.AT2")
@@ -268,3 +269,33 @@ def test_strength_coefficients_need_the_records_unit():
     with pytest.raises(nvib.ArgumentError) as info:
         nvib.inelastic_spectrum(unknown, [0.5], Cy=[0.1])
     assert info.value.argument == "Cy"
+
+
+def test_command_line_writes_the_table_csv_and_plot(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "spectrum", SGM1, "--ductility", "2", "4", "--periods", "0.3,1.5",
+                             "--out", tmp_path / "s.csv", "--plot", tmp_path / "s.png")
+    assert code == 0, err
+    assert "constant ductility, bilinear (b = 0), damping 0.05" in out and "μ = 2:" in out and "μ = 4:" in out
+    assert "C_y [-]" in out and "A_y [g]" in out
+    assert (tmp_path / "s.png").stat().st_size > 0
+    assert (tmp_path / "s.csv").read_text(encoding="utf-8").startswith("target μ [-],period [s]")
+    code, out, err = run_cli(capsys, "spectrum", SGM1, "--strength-ratio", "3", "--periods", "0.5",
+                             "--hardening", "0.05", "--units", "m/s^2")
+    assert code == 0 and "constant strength, bilinear (b = 0.05)" in out and "A_y [m/s^2]" in out
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["--ductility", "0.5"], "--ductility"),
+    (["--ductility", "2", "--strength-ratio", "2"], "--ductility"),
+    (["--strength-ratio", "0"], "--strength-ratio"),
+    (["--ductility", "2", "--hardening", "1.5"], "--hardening"),
+    (["--ductility", "2", "--law", "bouc_wen", "--hardening", "-1"], "--hardening"),
+    (["--ductility", "2", "--law", "spring"], "--law"),
+    (["--hardening", "0.1"], "--hardening"),
+    (["--ductility", "2", "--damping", "0.02", "0.05"], "--damping"),
+    (["--ductility", "2", "--damping", "1.5"], "--damping"),
+    (["--ductility", "2", "--accuracy", "1e-12"], "--accuracy"),
+])
+def test_command_line_bad_input_names_the_flag(capsys, argv, flag):
+    code, out, err = run_cli(capsys, "spectrum", SGM1, "--periods", "0.5", *argv)
+    assert code == 2 and f"argument {flag}" in err, err
