@@ -34,6 +34,7 @@ step), by default with Newmark's average acceleration and full Newton iterations
 a step are run together as the independent DOFs of one model (a diagonal mass, the law and the
 damper as effect arrays, every DOF under the ground acceleration): the same equations, each DOF's
 Newton update its own (the tangent is diagonal), at a fraction of the cost of one model per SDOF.
+solve_many takes one step per call, so the calls of different steps run on the worker threads at once.
 Each run lasts the record and FREE_VIBRATION_PERIODS periods of free vibration after it (of the
 longest period among the SDOFs run together): the peak inelastic response comes during the strong
 motion in practice, and the free vibration catches a peak that the record's end cuts short.
@@ -57,6 +58,7 @@ import numpy as np
 
 from .. import _checks
 from .._batch import RunError, solve_many
+from .._core import StopToken
 from .._errors import ArgumentError, ArgumentTypeError, NvibError
 from .._model import EFFECT_PARAMETERS, Model
 from .._records import STANDARD_GRAVITY, GroundMotion
@@ -375,12 +377,41 @@ class _Runs:
         return self.record_end + FREE_VIBRATION_PERIODS * T
 
     def __call__(self, jobs: list) -> list:
-        """The peak |u| of each job (p, substeps, fy), running those not run yet (all in one batch per step)."""
+        """The peak |u| of each job (p, substeps, fy), running those not run yet: one solve_many call per step,
+        the calls of different steps on ``workers`` threads at once (solve_many takes one step per call)."""
         todo = [j for j in dict.fromkeys(jobs) if j not in self.peak]
-        for n in sorted({j[1] for j in todo}):
-            group = sorted((j for j in todo if j[1] == n), key=lambda j: (self.periods[j[0]], j[2]))
-            self._run(n, group, self.per_model)
+        groups = [(n, sorted((j for j in todo if j[1] == n), key=lambda j: (self.periods[j[0]], j[2])))
+                  for n in sorted({j[1] for j in todo})]
+        if self.workers == 1 or len(groups) == 1:
+            done = [self._run(n, group, self.threads) for n, group in groups]
+        else:
+            done = self._concurrently(sorted(groups, key=lambda g: -g[0] * len(g[1])))  # the longest first
+        for runs, steps in done:
+            self.runs += runs
+            self.steps += steps
         return [self.peak[j] for j in jobs]
+
+    def _concurrently(self, groups: list) -> list:
+        """The groups of SDOFs of different steps, each through solve_many on one thread, ``workers`` at once.
+        Ctrl-C (KeyboardInterrupt in this thread) stops the runs under way at their next poll, as solve_many's
+        own threads are stopped, and the groups not started are not run."""
+        import concurrent.futures as cf
+
+        stop = StopToken()
+
+        def group(n, jobs):
+            with stop:
+                return self._run(n, jobs, 1)
+
+        with cf.ThreadPoolExecutor(self.workers) as pool:
+            futures = [pool.submit(group, n, jobs) for n, jobs in groups]
+            try:
+                return [f.result() for f in futures]
+            except BaseException:
+                stop.set()
+                for f in futures:
+                    f.cancel()
+                raise
 
     def _model(self, T: np.ndarray, fy: np.ndarray) -> Model:
         w = 2.0 * np.pi / T
@@ -391,24 +422,28 @@ class _Runs:
             effects.append({"type": "damper", "i": i, "c": 2.0 * self.damping * w})
         return Model(np.ones(T.size), effects=effects)
 
-    def _run(self, n: int, group: list, per_model: int) -> None:
+    def _run(self, n: int, group: list, threads, per_model: int | None = None) -> tuple:
+        """Run ``group`` (jobs of one step, rdt / n) through one solve_many call on ``threads`` threads, in models
+        of at most ``per_model`` SDOFs (and as many models as threads); keep their peaks. Returns (SDOF runs,
+        SDOF steps)."""
+        per_model = self.per_model if per_model is None else per_model
         dt = self.rdt / n
         T = np.array([self.periods[j[0]] for j in group])
         fy = np.array([j[2] for j in group])
-        count = max(math.ceil(len(group) / per_model), min(self.workers, len(group)))
+        count = max(math.ceil(len(group) / per_model), min(threads or self.workers, len(group)))
         parts = np.array_split(np.arange(len(group)), count)
         t_end = self.t_end(float(T.max()))
         batch = solve_many([self._model(T[k], fy[k]) for k in parts], self.scheme, dt=dt, t_end=t_end, keep="peaks",
-                           threads=self.threads, progress=False, max_displacement=math.inf)
-        self.runs += len(group)
-        self.steps += len(group) * round(t_end / dt)
+                           threads=threads, progress=False, max_displacement=math.inf)
+        runs, steps = len(group), len(group) * round(t_end / dt)
         for k, res in zip(parts, batch):
             jobs = [group[i] for i in k]
             if res is not None and res.success:
                 for j, u in zip(jobs, res.peak_u):
                     self.peak[j] = float(u)
             elif len(jobs) > 1:  # which SDOF failed: each on its own
-                self._run(n, jobs, 1)
+                more = self._run(n, jobs, threads, per_model=1)
+                runs, steps = runs + more[0], steps + more[1]
             elif res is not None and res.status == Status.collapsed:
                 self.peak[jobs[0]] = math.inf
             else:
@@ -416,6 +451,7 @@ class _Runs:
                 why = res.message if res is not None else "it was not run"
                 raise NvibError(f"inelastic_spectrum: the run at T = {T0:g} s with f_y = {f0:.6g} (dt = {dt:g} s) "
                                 f"{'could not be made' if isinstance(res, RunError) else 'failed'}: {why}")
+        return runs, steps
 
 
 def _laws() -> dict:
