@@ -235,7 +235,8 @@ def test_csv_and_plot(tmp_path):
     ax = sp.plot(tmp_path / "s.png")
     assert (tmp_path / "s.png").stat().st_size > 0
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels == ["elastic, exact (μ = 1)", "μ = 1", "μ = 3"]
+    assert labels == ["μ = 1 (elastic, exact)", "μ = 3"]
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), sp.PSa, rtol=1e-15)  # C_y = PSa / g, in g
     assert "[-]" in ax.get_ylabel() and "[s]" in ax.get_xlabel() and ax.get_xscale() == "log"
     ax = sp.plot(quantity="R_y")
     assert "R_y" in ax.get_ylabel()

@@ -188,10 +188,10 @@ class InelasticSpectrum:
 
     def plot(self, path=None, *, ax=None, quantity: str | None = None):
         """One curve per target against the period (log axis), labelled "μ = 2" (or "R_y = 4"), with the
-        elastic system (μ = 1, exact) for reference. ``quantity``: "Cy" (the default of a constant-
-        ductility spectrum of a record whose unit is known), "Ay" (its default otherwise), "R_y",
-        "fy_ratio", "mu" (the default of a constant-strength spectrum), "um" or "uy". Saves to ``path``
-        (PNG, SVG, PDF) if given; returns the axes."""
+        elastic system (μ = 1, exact) for reference, dashed (the curve of a target μ = 1 is that system).
+        ``quantity``: "Cy" (the default of a constant-ductility spectrum of a record whose unit is known),
+        "Ay" (its default otherwise), "R_y", "fy_ratio", "mu" (the default of a constant-strength
+        spectrum), "um" or "uy". Saves to ``path`` (PNG, SVG, PDF) if given; returns the axes."""
         if quantity is None:
             quantity = "mu" if self.kind == "constant strength" else ("Cy" if self.Cy is not None else "Ay")
         if quantity not in _PLOTTED:
@@ -215,10 +215,15 @@ class InelasticSpectrum:
         elastic = {"Cy": None if self.Cy is None else self.PSa / _gravity(self.units), "Ay": self.PSa,
                    "R_y": np.ones(self.periods.size), "fy_ratio": np.ones(self.periods.size),
                    "mu": np.ones(self.periods.size), "um": shown.Sd, "uy": shown.Sd}[quantity]
-        reference = "elastic, exact (μ = 1)" if quantity != "mu" else "elastic limit (μ = 1)"
-        ax.plot(self.periods, elastic, "k--", lw=1.2, label=reference)
+        elastic_target = self.target == "mu" and 1.0 in self.targets  # fbar_y = 1: the elastic curve itself
+        if not elastic_target:
+            reference = "elastic, exact (μ = 1)" if quantity != "mu" else "elastic limit (μ = 1)"
+            ax.plot(self.periods, elastic, "k--", lw=1.2, label=reference)
         for k in range(self.targets.size):
-            ax.plot(self.periods, values[k], "-o", ms=2.5, lw=1.4, label=f"{_TEX[self.target]} = {self.targets[k]:g}")
+            label = f"{_TEX[self.target]} = {self.targets[k]:g}"
+            elastic_curve = self.target == "mu" and self.targets[k] == 1.0
+            ax.plot(self.periods, values[k], "k--" if elastic_curve else "-o", ms=2.5, lw=1.2 if elastic_curve else 1.4,
+                    label=label + " (elastic, exact)" if elastic_curve else label)
         plain = FuncFormatter(lambda x, _: f"{x:g}")  # 0.2, 1, 5 rather than 2 x 10^-1
         ax.set_xscale("log")
         axes = [ax.xaxis]
