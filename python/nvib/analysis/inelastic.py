@@ -12,13 +12,13 @@ tried. The quantities are those of Chopra, Dynamics of Structures (4th ed., Pear
 - u_o, f_o = k u_o: the peak deformation and force of the elastic system (its exact Sd, from the
   closed-form kernel: GroundMotion.exact_response, as ``nvib.spectrum``);
 - f_y / f_o = fbar_y, the normalized yield strength, and R_y = f_o / f_y = 1 / fbar_y, the
-  yield-strength reduction factor (eq. 7.2.1, 7.2.2);
+  yield-strength reduction factor (section 7.2);
 - u_y = f_y / k, the yield deformation; u_m = max |u(t)|, the peak deformation; mu = u_m / u_y, the
-  ductility demand (eq. 7.2.4);
+  ductility demand (section 7.2);
 - A_y = w^2 u_y = f_y / m, the pseudo-acceleration of yield, and C_y = f_y / (m g) = A_y / g, the
-  yield-strength ratio (strength coefficient; eq. 7.5.1 to 7.5.3).
+  yield-strength ratio (strength coefficient; section 7.5).
 
-Constant strength (section 7.4): for given R_y (f_y = f_o / R_y) or C_y (f_y = C_y m g), the ductility
+Constant strength (sections 7.3, 7.4): for given R_y (f_y = f_o / R_y) or C_y (f_y = C_y m g), the ductility
 demand mu of each period. Constant ductility (section 7.5): for a target mu, the strength giving it.
 As in Chopra's procedure, mu is computed for a set of fbar_y values from 1 down (the scan), the first
 interval where mu(fbar_y) reaches the target brackets it, and the strength is refined there (regula
@@ -142,8 +142,8 @@ class InelasticSpectrum:
                                    PSa=self.PSa * f, units=units)
 
     def reduction_factors(self) -> dict:
-        """R_y(mu, T) of a constant-ductility spectrum: {mu: R_y at each period} (the R-mu-T relation of
-        this record, Chopra section 7.10)."""
+        """R_y(mu, T) of a constant-ductility spectrum: {mu: R_y at each period}, the R_y-mu-T relation of
+        this record (from which design relations such as Chopra's, chapter 7, are drawn)."""
         if self.kind != "constant ductility":
             raise _checks.value_error("kind", "R_y(mu, T) comes from a constant-ductility spectrum (ductility=)")
         return {float(m): self.R_y[k].copy() for k, m in enumerate(self.targets)}
@@ -653,7 +653,7 @@ def _constant_ductility(runs: _Runs, targets: np.ndarray, fo: np.ndarray, n0: np
             if coarse.get("unmet"):
                 notes[(t, p)] = ("unmet", coarse["mu"])
             err[t, p] = abs(coarse["fy"] - fine["fy"]) / fine["fy"] if fine["state"] == "found" else math.nan
-        # a period where no strength reaches the target keeps it at a finer step: it is not halved
+        # where no scanned strength reaches the target, a finer step is not tried
         todo = [(t, p) for t, p in todo if not err[t, p] <= accuracy and not np.isnan(fbar[t, p])]
         if attempt == max_halvings:
             break
