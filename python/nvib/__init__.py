@@ -10,7 +10,8 @@ integrates step by step. Tools: ``reference(model, t_end)`` (a closed form or
 a DOP853 solution to measure against), ``cost(model, schemes, dts)`` and
 ``cost_scipy(model)`` (accuracy against wall time), ``nvib.stability``
 (amplification matrices, spectral radius, period error and stability limits),
-``spectrum`` and ``ida`` (response spectra, incremental dynamic analysis) and
+``spectrum`` and ``ida`` (response spectra, incremental dynamic analysis),
+``inelastic_spectrum`` (constant-ductility and constant-strength spectra) and
 ``nvib.fragility`` (lognormal fragility functions by maximum likelihood).
 nvib is unit-agnostic; the built-in scenes use SI units (m, kg, s, N, rad).
 """
@@ -37,6 +38,7 @@ from ._schemes import Newton, schemes
 from ._solve import ENERGY_WARNING, Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
 from .analysis import exact, stability
 from .analysis.spectrum import Spectrum, spectrum
+from .analysis.inelastic import InelasticSpectrum, inelastic_spectrum
 from .analysis.ida import IDA, ida
 from .analysis import fragility
 from .analysis.fragility import Fragility
@@ -51,7 +53,7 @@ __version__ = "0.1.0"
 __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError", "ENERGY_WARNING",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
-    "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "IDA", "ida", "Fragility", "fragility", "rayleigh", "rayleigh_coefficients", "load_result",
+    "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "InelasticSpectrum", "inelastic_spectrum", "IDA", "ida", "Fragility", "fragility", "rayleigh", "rayleigh_coefficients", "load_result",
     "EFFECT_PARAMETERS", "Energy", "LawResponse", "drive", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",

@@ -27,7 +27,8 @@ from nvib.analysis import exact, stability
 # with settings. Functions without arguments (folders, names) have nothing to refuse.
 SKIP = {"ArgumentError", "ArgumentTypeError", "ConvergenceError", "DivergenceError", "NvibError", "RecordError",
         "SceneError", "SingularMatrixError", "Batch", "Energy", "Estimate", "Failure", "Fragility", "IDA", "LawResponse",
-        "Reference", "Result", "RunError", "RunSummary", "Spectrum", "Stats", "Status", "cmake_dir", "include_dir",
+        "InelasticSpectrum", "Reference", "Result", "RunError", "RunSummary", "Spectrum", "Stats", "Status", "cmake_dir",
+        "include_dir",
         "scene_names", "schemes", "stability.NvibError", "stability.Model", "stability.Stepper", "stability.StepLimit",
         "fragility.Fragility"}
 
@@ -134,6 +135,7 @@ def calls(files) -> dict:
         "solve": (nvib.solve, (osc, nvib.Newmark()), dict(run)),
         "solve_many": (nvib.solve_many, ([osc], nvib.Newmark()), dict(run, threads=1, progress=False)),
         "spectrum": (nvib.spectrum, (record, [0.5]), {"scheme": nvib.Newmark(), "max_halvings": 0}),
+        "inelastic_spectrum": (nvib.inelastic_spectrum, (record, [0.5]), {"ductility": [2.0], "max_halvings": 0}),
         "exact.forced_linear_sdof": (exact.forced_linear_sdof, ([0.0, 0.1],), {"m": 1.0, "k": 4.0, "amplitude": 1.0,
                                                                              "omega": 3.0}),
         "exact.hardening": (exact.hardening, ([0.0, 0.1],), {}),

@@ -1,4 +1,6 @@
-"""nvib spectrum: the response spectrum of a ground-motion record file."""
+"""nvib spectrum: the response spectrum of a ground-motion record file: elastic (exact, the default, or
+integrated by a scheme) or inelastic (constant ductility with --ductility, constant strength with
+--strength-ratio: nvib.inelastic_spectrum)."""
 
 from __future__ import annotations
 
@@ -35,6 +37,9 @@ def periods(text: str):
 
 FLAGS = {"periods": "--periods", "accuracy": "--accuracy", "damping": "--damping", "scheme": "--scheme",
          "record": "record"}
+INELASTIC_FLAGS = {**FLAGS, "ductility": "--ductility", "R": "--strength-ratio", "law": "--law",
+                   "law.b": "--hardening", "law.alpha": "--hardening"}
+HARDENING = {"bilinear": "b", "bouc_wen": "alpha"}  # --hardening: the law's post-yield stiffness ratio
 
 
 def add_parser(sub) -> None:
@@ -45,9 +50,14 @@ def add_parser(sub) -> None:
                        description="Response spectrum of a record (a PEER .AT2 file, or a text file of one column "
                                    "with --dt or two columns t, a): Sd, Sv, pseudo-Sv, pseudo-Sa and the absolute Sa "
                                    "for each period, exact (closed form, peaks between samples); with --scheme, "
-                                   "integrated by that scheme, with the accuracy reached against the exact peaks.",
-                       epilog="example:\n  nvib spectrum elcentro.AT2 --scale 9.80665 --damping 0.05 "
-                              "--periods 0.05:5:200 --plot sa.png",
+                                   "integrated by that scheme, with the accuracy reached against the exact peaks. "
+                                   "With --ductility or --strength-ratio, the inelastic spectrum of a hysteretic "
+                                   "SDOF (Chopra, Dynamics of Structures, 7.2-7.5): the strength giving each "
+                                   "ductility demand, or the ductility demand of each strength, checked by halving "
+                                   "the step.",
+                       epilog="examples:\n  nvib spectrum elcentro.AT2 --scale 9.80665 --damping 0.05 "
+                              "--periods 0.05:5:200 --plot sa.png\n"
+                              "  nvib spectrum elcentro.AT2 --ductility 1 2 4 6 --periods 0.05:3:50 --plot cy.png",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("record", help="the record file")
     p.add_argument("--dt", type=c.positive_real, help="the sample step of a one-column file [s]")
@@ -65,8 +75,21 @@ def add_parser(sub) -> None:
                                                   "solution (to see what a scheme's spectrum costs and how accurate "
                                                   "it is)")
     p.add_argument("--accuracy", type=c.positive_real,
-                   help="with --scheme: relative accuracy of Sd and Sa to reach (default 1e-3)")
-    p.add_argument("--out", metavar="CSV", help="write the spectrum to this CSV file")
+                   help="with --scheme: relative accuracy of Sd and Sa to reach; with --ductility or "
+                        "--strength-ratio: of the strength or the ductility demand, measured by halving the step "
+                        "(default 1e-3)")
+    p.add_argument("--ductility", type=c.real, nargs="+", metavar="MU",
+                   help="constant-ductility spectrum: for each ductility demand mu >= 1, the largest yield "
+                        "strength giving it at each period (C_y, A_y, R_y = f_o / f_y)")
+    p.add_argument("--strength-ratio", type=c.real, nargs="+", metavar="R",
+                   help="constant-strength spectrum: the ductility demand at each period of the yield strength "
+                        "f_y = f_o / R (R = R_y > 0, the yield-strength reduction factor)")
+    p.add_argument("--law", choices=tuple(HARDENING),
+                   help="with --ductility or --strength-ratio: the hysteretic law (default bilinear)")
+    p.add_argument("--hardening", type=c.real, metavar="B",
+                   help="with --ductility or --strength-ratio: the post-yield stiffness ratio (bilinear b, "
+                        "bouc_wen alpha; default 0, elastic-perfectly plastic)")
+    p.add_argument("--out", "--csv", metavar="CSV", help="write the spectrum to this CSV file")
     p.add_argument("--plot", metavar="PNG", help="write the spectra to this PNG")
     p.set_defaults(func=lambda args, parser: c.run_checked(run, args, parser), subparser=p)
 
@@ -93,6 +116,11 @@ def run(args) -> int:
     if args.units is not None and record.units not in ("g", "m/s^2"):
         raise c.Usage("--units", f"the unit of {args.record}'s values is not known; give --record-units")
     units = args.units or record.units
+    if args.ductility is not None or args.strength_ratio is not None:
+        return run_inelastic(args, record, units)
+    for flag, value in (("--law", args.law), ("--hardening", args.hardening)):
+        if value is not None:
+            raise c.Usage(flag, "applies to an inelastic spectrum (--ductility or --strength-ratio)")
     if args.accuracy is not None and args.scheme is None:
         raise c.Usage("--accuracy", "applies to runs with --scheme: the spectrum without one is exact")
     scheme = c.make_scheme(args.scheme, args) if args.scheme is not None else None
@@ -159,3 +187,68 @@ def run(args) -> int:
             print(f"nvib spectrum: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
             code = 1
     return code
+
+
+def run_inelastic(args, record, units: str) -> int:
+    """The constant-ductility (--ductility) or constant-strength (--strength-ratio) spectrum: a table of every
+    tenth period per target, the warnings, and the CSV and plot asked for."""
+    import numpy as np
+
+    from .. import NvibError, inelastic_spectrum
+
+    if args.ductility is not None and args.strength_ratio is not None:
+        raise c.Usage("--ductility", "gives a constant-ductility spectrum, --strength-ratio a constant-strength "
+                                     "one: give one of them")
+    if len(args.damping) != 1:
+        raise c.Usage("--damping", "an inelastic spectrum takes one damping ratio")
+    law = {"type": args.law or "bilinear"}
+    law[HARDENING[law["type"]]] = args.hardening if args.hardening is not None else 0.0
+    scheme = c.make_scheme(args.scheme, args) if args.scheme is not None else None
+    try:
+        sp = inelastic_spectrum(record, args.periods, ductility=args.ductility, R=args.strength_ratio,
+                                damping=args.damping[0], law=law, scheme=scheme, accuracy=args.accuracy)
+    except NvibError as exc:  # a run failed (diverged, Newton failed): its period and strength
+        print(f"nvib spectrum: error: {str(exc).removeprefix('inelastic_spectrum: ')}", file=sys.stderr)
+        return 1
+    except (ValueError, TypeError) as exc:
+        raise c.usage_from(exc, INELASTIC_FLAGS) from None
+    if units and units != sp.units:
+        sp = sp.in_units(units)
+    print(f"{record}")
+    worst = np.nanmax(sp.error) if np.any(np.isfinite(sp.error)) else math.nan
+    how = ", ".join(f"{k} = {v:g}" for k, v in law.items() if k != "type")
+    print(f"{sp.kind}, {law['type']}{f' ({how})' if how else ''}, damping {sp.damping:g}: {sp.periods.size} "
+          f"periods x {sp.targets.size} targets, {sp.scheme}, {sp.runs} SDOF runs in {c.seconds(sp.wall_time)}, "
+          f"largest error {worst:.1e} (accuracy {sp.accuracy:g}, measured by halving the step)")
+    columns = [(h, v) for h, v in sp.columns() if not h.startswith(("u_y", "dt"))]
+    step = max(1, sp.periods.size // 10)
+    for k in range(sp.targets.size):
+        rows = [["T [s]"] + [h for h, _ in columns]]
+        for j in range(0, sp.periods.size, step):
+            rows.append([f"{sp.periods[j]:.4g}"] + [_cell(v[k, j], h) for h, v in columns])
+        print(f"{sp.label(k)}:")
+        print("\n".join("  " + line for line in c.table(rows, right=set(range(len(rows[0]))))))
+    for w in sp.warnings:
+        print(f"nvib spectrum: warning: {w}", file=sys.stderr)
+    code = 0
+    if args.out:
+        try:
+            sp.to_csv(args.out)
+            print(f"wrote {args.out}")
+        except OSError as exc:
+            print(f"nvib spectrum: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+    if args.plot:
+        try:
+            sp.plot(args.plot)
+            print(f"wrote {args.plot}")
+        except OSError as exc:
+            print(f"nvib spectrum: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
+            code = 1
+    return code
+
+
+def _cell(x: float, header: str) -> str:
+    if x != x:  # NaN: not found (the warnings say why)
+        return "n/a"
+    return f"{x:.1e}" if header == "error" else f"{x:.4g}"

@@ -168,7 +168,9 @@ class NewtonSolver {
 
   template <class Problem, class ModelT>
   Status factorize(Problem& p, ModelT& model, const IterationMatrix& im, double t, std::int64_t step, Stats& st) {
-    poll_interrupt();  // a large model's factorisation can take a second
+    // A large model's factorisation can take a second: poll before it, on a clock. Polling at every one
+    // takes the GIL (Python's hook) each step of a small yielding model, which serialises solve_many's threads.
+    if (poll_.tick()) poll_interrupt();
     const bool regular = ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference, opt_.linear_solver);
     if (ls_.reused())
       ++st.num_reused_factorizations;  // an S identical to the last keeps its factors
@@ -266,6 +268,7 @@ class NewtonSolver {
   bool factorized_ = false;
   double accepted_ = std::numeric_limits<double>::quiet_NaN();
   Failure failure_;
+  ClockPoll poll_;
 };
 
 }  // namespace nvib
