@@ -307,7 +307,7 @@ def first_period(model: Model) -> float:
 
 # ---- the demand -----------------------------------------------------------------------------------
 
-def _check_measure(model, measure, heights) -> tuple[str, str]:
+def _check_measure(model, measure) -> tuple[str, str]:
     """(name, unit) of the measure, checked before any run (a run that collapses has none to look it up in):
     "drift_ratio" (needs storeys), "peak_drift" (named effects with a measure), "peak_u" or an effect's name."""
     if not isinstance(model, Model):
@@ -434,7 +434,7 @@ def _validate(model, records, levels, im, period, damping, measure, storeys, dri
                                                  "drift, and their heights in m; a scene's [storeys] table), or "
                                                  "measure='peak_drift', 'peak_u' or an effect's name")
     heights = storey_heights(model, storeys) if measure == "drift_ratio" else None
-    measure_name, measure_unit = _check_measure(model, measure, heights)
+    measure_name, measure_unit = _check_measure(model, measure)
     if levels is not None:
         levels = np.sort(_checks.real_array("levels", levels))
         if levels.ndim != 1 or levels.size == 0 or np.any(levels <= 0):
