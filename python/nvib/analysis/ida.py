@@ -347,6 +347,25 @@ def _demand(summary, measure: str, heights) -> tuple[float, str]:
 
 # ---- the tracer --------------------------------------------------------------------------------------
 
+def _verdicts(points: dict, slope_limit: float) -> list:
+    """[(level, demand, cause, message, storey, run demand)] of ``points`` {level: (demand, failed cause,
+    message, storey)}, sorted, each run's cause decided: a failed run's own, and "dynamic instability" where
+    the slope from the highest surviving level below falls under ``slope_limit`` times the elastic slope."""
+    out, below, elastic = [], None, None
+    for x in sorted(points):
+        d, cause, msg, storey = points[x]
+        if not cause and below is not None and elastic is not None and d > below[1]:
+            if (x - below[0]) / (d - below[1]) < slope_limit * elastic:
+                cause, msg = "dynamic instability", (f"the curve's slope from {below[0]:.4g} fell under "
+                                                     f"{slope_limit:g} of its elastic slope")
+        out.append((x, d if not cause else math.inf, cause, msg, storey, d))
+        if not cause and below is None and d > 0:
+            elastic = x / d  # the secant of the first level: the curve's elastic slope
+        if not cause and (below is None or x > below[0]):
+            below = (x, d)
+    return out
+
+
 class _Record:
     """The runs of one record so far, and what to run next (hunt, then fill)."""
 
@@ -358,21 +377,7 @@ class _Record:
         self.note = ""
 
     def verdicts(self):
-        """[(level, demand, cause, message, storey)] sorted, each run's cause decided: a failed run's own, and
-        "dynamic instability" where the slope from the highest surviving level below falls under the limit."""
-        out, below, elastic = [], None, None
-        for x in sorted(self.points):
-            d, cause, msg, storey = self.points[x]
-            if not cause and below is not None and elastic is not None and d > below[1]:
-                if (x - below[0]) / (d - below[1]) < self.slope_limit * elastic:
-                    cause, msg = "dynamic instability", (f"the curve's slope from {below[0]:.4g} fell under "
-                                                         f"{self.slope_limit:g} of its elastic slope")
-            out.append((x, d if not cause else math.inf, cause, msg, storey, d))
-            if not cause and below is None and d > 0:
-                elastic = x / d  # the secant of the first level: the curve's elastic slope
-            if not cause and (below is None or x > below[0]):
-                below = (x, d)
-        return out
+        return _verdicts(self.points, self.slope_limit)
 
     def bracket(self):
         """(highest level survived below the first collapse, first collapsing level) or None."""
@@ -558,9 +563,8 @@ def ida(model, records, levels=None, *, im="sa", period: float | None = None, da
         v = t.verdicts()
         err = np.full(len(v), np.nan)
         if check:
-            half = _Record(0, 0, 0, 1, 1, 0, lim["slope_limit"])
-            half.points = {x: checks[(i, x)] for x, *_ in v}
-            for k, ((x, d, cause, *_), (_, dh, cause_h, *_)) in enumerate(zip(v, half.verdicts())):
+            half = _verdicts({x: checks[(i, x)] for x, *_ in v}, lim["slope_limit"])
+            for k, ((x, d, cause, *_), (_, dh, cause_h, *_)) in enumerate(zip(v, half)):
                 if bool(cause) != bool(cause_h):
                     err[k] = math.inf
                     warnings.append(f"{names[i]} at {x:.4g}: the verdict changes when the step is halved ("

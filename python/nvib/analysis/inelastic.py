@@ -486,12 +486,19 @@ def _constant_strength(runs: _Runs, fy: np.ndarray, n0: np.ndarray, accuracy: fl
         todo = [(t, p) for t, p in todo if not err[t, p] <= accuracy]
         if attempt == max_halvings:
             break
-        todo = [(t, p) for t, p in todo if _steps(runs, p, 4 * n[t, p]) <= MAX_STEPS]
+        todo = _halve(todo, runs, n)
         if not todo:
             break
-        for t, p in todo:
-            n[t, p] *= 2
     return um, err, n, uy
+
+
+def _halve(todo: list, runs: _Runs, n: np.ndarray) -> list:
+    """The (target, period) pairs of ``todo`` whose step can be halved again (their check at half of it stays
+    within MAX_STEPS), their step counts ``n`` doubled."""
+    todo = [(t, p) for t, p in todo if _steps(runs, p, 4 * n[t, p]) <= MAX_STEPS]
+    for t, p in todo:
+        n[t, p] *= 2
+    return todo
 
 
 def _steps(runs: _Runs, p: int, n: int) -> float:
@@ -657,11 +664,9 @@ def _constant_ductility(runs: _Runs, targets: np.ndarray, fo: np.ndarray, n0: np
         todo = [(t, p) for t, p in todo if not err[t, p] <= accuracy and not np.isnan(fbar[t, p])]
         if attempt == max_halvings:
             break
-        todo = [(t, p) for t, p in todo if _steps(runs, p, 4 * n[t, p]) <= MAX_STEPS]
+        todo = _halve(todo, runs, n)
         if not todo:
             break
-        for t, p in todo:
-            n[t, p] *= 2
     return fbar, mu, err, n, notes
 
 
