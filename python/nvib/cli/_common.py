@@ -119,6 +119,22 @@ def isatty(stream) -> bool:
         return False
 
 
+def write_output(command: str, arg: str, path: str | None, write) -> int:
+    """write(path) for the output option ``arg`` when given: "wrote PATH", or an error naming the option on
+    the standard error. Returns the exit status it asks for: 0, or 1 when the file could not be written."""
+    import sys
+
+    if path is None:
+        return 0
+    try:
+        write(path)
+    except OSError as exc:
+        print(f"nvib {command}: error: {arg}: cannot write {path!r}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    print(f"wrote {path}")
+    return 0
+
+
 def check_output(arg: str, path: str, formats: tuple[str, ...]) -> None:
     if not path:
         raise Usage(arg, f"expected a file name ending in {' or '.join(formats)}, got an empty one")

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 from . import _common as c
 
@@ -90,14 +89,7 @@ def run(args) -> int:
         raise c.usage_from(exc, {"demand_limit": "--demand-limit", "path": "FILE", "ims": "FILE", "z": "FILE",
                                  "n": "FILE", "levels": "FILE", "censored": "FILE", "ida": "FILE"}, default="FILE") from None
     print(fragility.markdown_table(fits))
-    if args.plot:
-        try:
-            _plot(fits, args.plot)
-            print(f"wrote {args.plot}")
-        except OSError as exc:
-            print(f"nvib fragility: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
-            return 1
-    return 0
+    return c.write_output("fragility", "--plot", args.plot, lambda path: _plot(fits, path))
 
 
 def _plot(fits, path) -> None:

@@ -116,24 +116,13 @@ def run(args) -> int:
               f"84 % {res.capacity_fractile(84):.4g} {res.im_unit} (records that never collapsed count as above)")
     for w in res.warnings:
         print(f"warning: {w}")
-    code = 0
-    for arg, path, write in (("--out", args.out, lambda p: res.to_csv(p)), ("--plot", args.plot, lambda p: res.plot(p)),
-                             ("--fragility", args.fragility, lambda p: _fragility(res, p, fragility))):
-        if path is None:
-            continue
+    code = max(c.write_output("ida", "--out", args.out, res.to_csv), c.write_output("ida", "--plot", args.plot, res.plot))
+    if args.fragility is not None:
         try:
-            write(path)
-            print(f"wrote {path}")
-        except OSError as exc:
-            print(f"nvib ida: error: {arg}: cannot write {path!r}: {exc.strerror or exc}", file=sys.stderr)
-            code = 1
+            f = fragility.from_ida(res)
         except ValueError as exc:  # no record collapsed: no collapse fragility
-            print(f"nvib ida: error: {arg}: {exc}", file=sys.stderr)
-            code = 1
+            print(f"nvib ida: error: --fragility: {exc}", file=sys.stderr)
+            return 1
+        print(fragility.markdown_table([f]))
+        code = max(code, c.write_output("ida", "--fragility", args.fragility, f.plot))
     return code
-
-
-def _fragility(res, path, fragility) -> None:
-    f = fragility.from_ida(res)
-    print(fragility.markdown_table([f]))
-    f.plot(path)

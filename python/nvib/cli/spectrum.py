@@ -230,22 +230,8 @@ def run_inelastic(args, record, units: str) -> int:
         print("\n".join("  " + line for line in c.table(rows, right=set(range(len(rows[0]))))))
     for w in sp.warnings:
         print(f"nvib spectrum: warning: {w}", file=sys.stderr)
-    code = 0
-    if args.out:
-        try:
-            sp.to_csv(args.out)
-            print(f"wrote {args.out}")
-        except OSError as exc:
-            print(f"nvib spectrum: error: --out: cannot write {args.out!r}: {exc.strerror or exc}", file=sys.stderr)
-            code = 1
-    if args.plot:
-        try:
-            sp.plot(args.plot)
-            print(f"wrote {args.plot}")
-        except OSError as exc:
-            print(f"nvib spectrum: error: --plot: cannot write {args.plot!r}: {exc.strerror or exc}", file=sys.stderr)
-            code = 1
-    return code
+    return max(c.write_output("spectrum", "--out", args.out, sp.to_csv),
+               c.write_output("spectrum", "--plot", args.plot, sp.plot))
 
 
 def _cell(x: float, header: str) -> str:
