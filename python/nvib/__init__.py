@@ -35,7 +35,7 @@ from ._tables import load_result
 from . import _result  # noqa: F401  (Result's Python members)
 from ._scenes import SceneError, load_scene, scene_names
 from ._schemes import Newton, schemes
-from ._solve import ENERGY_WARNING, Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
+from ._solve import ENERGY_WARNING, ERROR_WARNING, Energy, Failure, Result, Stats, Status, Stepper, default_max_displacement, solve
 from .analysis import exact, stability
 from .analysis.spectrum import Spectrum, spectrum
 from .analysis.inelastic import InelasticSpectrum, inelastic_spectrum
@@ -51,7 +51,7 @@ globals().update({cls.__name__: cls for cls in _schemes.scheme_classes()})
 __version__ = "0.1.0"
 
 __all__ = sorted([
-    "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError", "ENERGY_WARNING",
+    "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError", "ENERGY_WARNING", "ERROR_WARNING",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
     "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "InelasticSpectrum", "inelastic_spectrum", "IDA", "ida", "Fragility", "fragility", "rayleigh", "rayleigh_coefficients", "load_result",
     "EFFECT_PARAMETERS", "Energy", "LawResponse", "drive", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",

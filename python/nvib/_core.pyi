@@ -116,6 +116,7 @@ class Result:
     num_steps_requested: int
     max_residual: float | None
     _peaks: tuple[Array, Array] | None
+    _error_estimate: Array | None
     scheme: _Scheme
     dt: float
     # the Python members (nvib/_result.py)
@@ -123,6 +124,7 @@ class Result:
     units: list[str]
     warnings: list[str]
     absolute_a: Array
+    error_estimate: Any
     def to_pandas(self) -> Any: ...
     def to_xarray(self) -> Any: ...
     def save(self, path: str | os.PathLike[str], extra: dict[str, Any] | None = ...) -> None: ...

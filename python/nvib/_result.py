@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ._core import Result
 from ._model import unit_list
-from ._solve import _extras, absolute_a
+from ._solve import _extras, absolute_a, error_estimate
 from ._tables import save, to_pandas, to_xarray
 
 Result.relative_to_ground = property(
@@ -22,6 +22,7 @@ Result.warnings = property(
         "part, damping included (``nvib.stability.step_warning``), an energy balance error above "
         "``ENERGY_WARNING`` (5 %) of the energy scale when energy was recorded")
 Result.absolute_a = property(absolute_a, doc=absolute_a.__doc__)
+Result.error_estimate = property(error_estimate, doc=error_estimate.__doc__)
 Result.to_pandas = to_pandas
 Result.to_xarray = to_xarray
 Result.save = save

@@ -8,6 +8,7 @@ import contextlib
 import difflib
 import inspect
 import math
+import typing
 
 import numpy as np
 
@@ -63,6 +64,84 @@ ENERGY_WARNING = 0.05
 """A run that records its energy and ends with a relative energy balance error above this (5 %) gets an
 entry in ``Result.warnings``: its history is not to be trusted even though it did not diverge."""
 
+ERROR_WARNING = 0.01
+"""A run whose estimated error (``Result.error_estimate``) exceeds this (1 % of a DOF's peak) gets an entry
+in ``Result.warnings`` naming the DOF and the step that would meet it."""
+
+
+class _Warn(typing.NamedTuple):
+    """The levels at which a run's result warns: energy balance error, estimated error."""
+    energy: float
+    error: float
+
+
+class ErrorEstimate:
+    """The error a run estimates for itself, from its accepted steps (``Result.error_estimate``).
+
+    per_dof : every DOF's estimated max |u_i - u_i,exact| / max |u_i| (NaN where the scheme's error
+    is not seen by the estimate: PreciseIntegration, exact on linear modes). max, dof : the largest and
+    the DOF's name. dt, order : the run's step and the scheme's global order, so that ``dt_for(target)``
+    = dt (target / max)^(1/order) is the step that would meet target.
+
+    The estimate is the leading phase error of the scheme on each mode, c h^2 tau |da/dt|, with c the
+    scheme's error constant (its principal eigenvalue against exp(i w h)) and tau the age of the motion
+    (its damping, viscous and hysteretic, forgets): see ``cpp/include/nvib/solve/error_estimate.hpp``.
+    Measured against closed forms and DOP853 in ``benchmarks/results/error_estimate.md``."""
+
+    def __init__(self, per_dof: np.ndarray, names: list[str], dt: float, order: int):
+        self.per_dof = np.asarray(per_dof, dtype=float)
+        self.names = names  # indexable (a model's generated names are made on demand)
+        self.dt = float(dt)
+        self.order = int(order)
+        seen = ~np.isnan(self.per_dof)
+        if np.any(seen):
+            k = int(np.argmax(np.where(seen, self.per_dof, -np.inf)))
+            self.max, self.dof = float(self.per_dof[k]), self.names[k]
+        else:
+            self.max, self.dof = math.nan, None
+
+    @property
+    def available(self) -> bool:
+        return not math.isnan(self.max)
+
+    def dt_for(self, target: float) -> float:
+        """The step at which the estimate would be ``target`` (its leading term scales as dt^order)."""
+        target = _checks.real("target", target, positive=True)
+        if not self.available or self.max <= 0.0:
+            return math.inf if self.available else math.nan
+        return self.dt * (target / self.max) ** (1.0 / self.order)
+
+    def as_dict(self) -> dict:
+        return {self.names[k]: float(e) for k, e in enumerate(self.per_dof)}
+
+    def __repr__(self) -> str:
+        if not self.available:
+            return "ErrorEstimate(not available for this scheme)"
+        return f"ErrorEstimate(max {self.max:.3g} at {self.dof}, dt {self.dt:g} s, order {self.order})"
+
+
+def error_estimate(self) -> ErrorEstimate | None:
+    """The run's estimate of its own error relative to each DOF's peak (``ErrorEstimate``), or None for a
+    run made with ``error_estimate=False``."""
+    per_dof = self._error_estimate
+    if per_dof is None:
+        return None
+    extras = _extras(self)
+    names = extras.get("all_dofs")
+    if names is None:
+        names = [f"dof{k}" for k in range(len(per_dof))]
+    return ErrorEstimate(per_dof, names, self.dt, extras.get("order", 2))
+
+
+def _error_note(res: Result, limit: float) -> str | None:
+    """The warning of a completed run whose estimated error exceeds limit (a failed run says why it failed)."""
+    est = error_estimate(res)
+    if res.status != Status.success or est is None or not est.available or not est.max > limit:
+        return None
+    return (f"the estimated error reached {est.max:.2g} of the peak of {est.dof} (above warn_error = {limit:g}): "
+            f"a step of about {est.dt_for(limit):.3g} s would meet it (the run's is {est.dt:g} s); "
+            f"nvib.cost measures the true error against a reference")
+
 
 def _extras(self) -> dict:
     return self._extras if isinstance(self._extras, dict) else {}
@@ -86,10 +165,10 @@ def _failure_error(res: Result, note: str | None):
     return exc
 
 
-def _annotate(res: Result, model: Model, warn_energy_error: float, note: str | None = None) -> Result:
+def _annotate(res: Result, model: Model, warn: _Warn, note: str | None = None) -> Result:
     """What the Python layer knows about a run beside its history: the ground motions under the model
     (relative displacements, absolute accelerations), the units of the saved DOFs, and warnings (the
-    model's own, a dt above the stability limit, an energy balance error)."""
+    model's own, a dt above the stability limit, an energy balance error, an estimated error)."""
     idx = np.asarray(res.dof_indices, dtype=int)
     units = model._units if isinstance(model._units, str) else [model._units[k] for k in idx]
     warnings = list(model.warnings)
@@ -98,13 +177,18 @@ def _annotate(res: Result, model: Model, warn_energy_error: float, note: str | N
     if res.energy is not None and len(res.t) > 1:
         with np.errstate(all="ignore"):
             rel = res.energy.relative_balance_error()
-        if np.isfinite(rel) and rel > warn_energy_error:
+        if np.isfinite(rel) and rel > warn.energy:
             warnings.append(f"the energy balance error reached {rel:.1%} of the energy scale (above "
-                            f"{warn_energy_error:.0%}): this history is inaccurate; try a smaller dt")
+                            f"{warn.energy:.0%}): this history is inaccurate; try a smaller dt")
     if res.status == Status.collapsed:
         warnings.append(res.failure.message)
     ground = _ground_of(model, idx)
-    res._extras = {"ground": ground, "relative_to_ground": ground is not None, "units": units, "warnings": warnings}
+    order = getattr(res.scheme, "order_u", 2)
+    res._extras = {"ground": ground, "relative_to_ground": ground is not None, "units": units, "warnings": warnings,
+                   "all_dofs": model.dofs, "order": order if isinstance(order, int) else 2}
+    error_note = _error_note(res, warn.error)
+    if error_note:
+        warnings.append(error_note)
     return res
 
 
@@ -157,7 +241,7 @@ Energy.__repr__ = _energy_repr
 
 
 @contextlib.contextmanager
-def _partial_annotated(model: Model, warn: float, note: str | None = None):
+def _partial_annotated(model: Model, warn: _Warn, note: str | None = None):
     """A run stopped by an exception (Ctrl-C, an error in a Python callback) carries the history saved
     before it as ``exc.result``: annotated like any result (units, ground, warnings)."""
     try:
@@ -169,8 +253,8 @@ def _partial_annotated(model: Model, warn: float, note: str | None = None):
         raise
 
 
-def _warning_level(value) -> float:
-    return _checks.real("warn_energy_error", value, positive=True) if value != math.inf else math.inf
+def _warning_level(name: str, value) -> float:
+    return _checks.real(name, value, positive=True) if value != math.inf else math.inf
 
 
 def _check_model(model):
@@ -224,6 +308,8 @@ RUN_OPTIONS = {
     "record": None,
     "collapse_deformation": _core.RUN_DEFAULTS["collapse_deformation"],
     "stop_at_collapse": _core.RUN_DEFAULTS["stop_at_collapse"],
+    "error_estimate": _core.RUN_DEFAULTS["error_estimate"],
+    "warn_error": ERROR_WARNING,
 }
 
 
@@ -236,7 +322,7 @@ def check_option_names(options: dict, *, also=()) -> None:
             raise _checks.type_error(key, f"not an option of a run{hint}")
 
 
-def check_settings(given: dict) -> tuple[dict, object, bool, float]:
+def check_settings(given: dict) -> tuple[dict, object, bool, _Warn]:
     """The options of a run that do not depend on the model, from the caller's keywords: (the C++ loop's
     options among them, progress, throw, warn_energy_error). Types are converted and Python's own options
     checked (the loop checks the rest); solve_many checks a batch's options with it once, before any run."""
@@ -252,11 +338,14 @@ def check_settings(given: dict) -> tuple[dict, object, bool, float]:
                 max_energy_error=_limit("max_energy_error", o["max_energy_error"]),
                 collapse_deformation=math.nan if o["collapse_deformation"] is None else
                 _checks.real("collapse_deformation", o["collapse_deformation"], positive=True),
-                stop_at_collapse=_checks.boolean("stop_at_collapse", o["stop_at_collapse"]))
-    return core, progress, _checks.boolean("throw", o["throw"]), _warning_level(o["warn_energy_error"])
+                stop_at_collapse=_checks.boolean("stop_at_collapse", o["stop_at_collapse"]),
+                error_estimate=_checks.boolean("error_estimate", o["error_estimate"]))
+    warn = _Warn(_warning_level("warn_energy_error", o["warn_energy_error"]),
+                 _warning_level("warn_error", o["warn_error"]))
+    return core, progress, _checks.boolean("throw", o["throw"]), warn
 
 
-def _run_options(model: Model, given: dict) -> tuple[dict, object, bool, float]:
+def _run_options(model: Model, given: dict) -> tuple[dict, object, bool, _Warn]:
     """check_settings, and the options that name the model's DOFs and effects."""
     core, progress, throw, warn = check_settings(given)
     core.update(dofs=_dof_indices(model, given.get("dofs", RUN_OPTIONS["dofs"])),

@@ -194,6 +194,10 @@ inline void bind_result(py::module_& m) {
                               std::isnan(e) ? py::object(py::none()) : py::object(py::float_(e)));
       }, "(max |u_i| per DOF, max |D u| per row of D, the relative energy balance error or None) over every step "
          "of a run made with peaks=D; else None")
+      .def_property_readonly("_error_estimate", [](const PyResult& p) -> py::object {
+        if (p.r.error_estimate.size() == 0) return py::none();
+        return py::cast(nvib::Vector(p.r.error_estimate));
+      }, "every DOF's estimated error relative to its peak (SolveOptions::error_estimate), or None")
       .def_readonly("scheme", &PyResult::scheme)
       .def_readonly("dt", &PyResult::dt)
       .def_readwrite("_extras", &PyResult::extras, "what the Python layer adds: a dict (ground, units, warnings)")
@@ -205,10 +209,10 @@ inline void bind_result(py::module_& m) {
               effects.append(py::make_tuple(e.name, e.type, e.state_names, e.count, e.measure, e.rate, e.force, e.state));
             return py::make_tuple(r.t, r.u, r.v, r.a, r.energy, r.dofs, r.stats, r.status, r.failure,
                                   r.num_steps_requested, r.max_residual, p.scheme, p.dt, p.names, p.extras, effects,
-                                  r.peak_u, r.peak_measures, r.peak_energy_error);
+                                  r.peak_u, r.peak_measures, r.peak_energy_error, r.error_estimate);
           },
           [](const py::tuple& x) {
-            if (x.size() != 16 && x.size() != 19) raise_value_error("state", "not a pickled Result");
+            if (x.size() != 16 && x.size() != 19 && x.size() != 20) raise_value_error("state", "not a pickled Result");
             auto p = std::make_unique<PyResult>();
             nvib::Result& r = p->r;
             r.t = x[0].cast<nvib::Vector>();
@@ -244,6 +248,7 @@ inline void bind_result(py::module_& m) {
               r.peak_measures = x[17].cast<nvib::Vector>();
               r.peak_energy_error = x[18].cast<double>();
             }
+            if (x.size() == 20) r.error_estimate = x[19].cast<nvib::Vector>();
             return p;
           }))
       .def("__repr__", [](const PyResult& p) {

@@ -167,6 +167,7 @@ inline SolveOptions solve_options(const py::dict& given) {
     else if (key == "record") opt.record = v.cast<std::vector<std::string>>();
     else if (key == "collapse_deformation") opt.collapse_deformation = v.cast<double>();
     else if (key == "stop_at_collapse") opt.stop_at_collapse = v.cast<bool>();
+    else if (key == "error_estimate") opt.error_estimate = v.cast<bool>();
     else if (key == "peaks") {  // internal (solve_many's keep="peaks"): an (m, n) sparse D, or None
       opt.peaks = !v.is_none();
       if (opt.peaks) opt.peak_measures = v.cast<nvib::SparseMatrix>();
@@ -188,6 +189,7 @@ inline py::dict run_defaults() {
   out["max_energy_error"] = none_if_nan(d.max_energy_error);
   out["collapse_deformation"] = none_if_nan(d.collapse_deformation);
   out["stop_at_collapse"] = d.stop_at_collapse;
+  out["error_estimate"] = d.error_estimate;
   return out;
 }
 

@@ -36,6 +36,7 @@ SKIP = {"ArgumentError", "ArgumentTypeError", "ConvergenceError", "DivergenceErr
 FLOATS = {"rayleigh": ["zeta"], "rayleigh_coefficients": ["zeta"], "solve_many": ["t0", "max_displacement",
                                                                                    "max_energy_error",
                                                                                    "warn_energy_error",
+                                                                                   "warn_error",
                                                                                    "collapse_deformation"],
           "stability.damping_ratio": ["omega_h"], "stability.period_error": ["omega_h"],
           "stability.principal_eigenvalue": ["omega_h"], "stability.spectral_radius": ["omega_h"],
@@ -44,7 +45,7 @@ FLOATS = {"rayleigh": ["zeta"], "rayleigh_coefficients": ["zeta"], "solve_many":
           "default_max_displacement": ["duration"]}
 
 # Inf is a documented value here ("no limit"); NaN is still refused.
-INF_ALLOWED = {"max_displacement", "max_energy_error", "warn_energy_error"}
+INF_ALLOWED = {"max_displacement", "max_energy_error", "warn_energy_error", "warn_error"}
 
 
 def oscillator():

@@ -380,6 +380,11 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
         lines.append((f"final {dof}", f"t = {res.t[-1]:.6g} s: u = {u:.9g} {unit}, v = {v:.9g} {rate_unit(unit, 1)}, "
                                       f"a = {a:.9g} {rate_unit(unit, 2)}"
                                       + (" (relative to the ground)" if res.relative_to_ground else "")))
+    est = res.error_estimate
+    if est is not None:
+        lines.append(("error estimate", f"{est.max:.2g} of the peak of {est.dof} (max |u - u_exact| / max |u|, "
+                                        f"estimated from the steps)" if est.available else
+                      "not available for this scheme (exact on linear modes; nvib cost measures its error)"))
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
         lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D + H - W - E0| / max energy)"

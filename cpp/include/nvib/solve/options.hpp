@@ -54,6 +54,9 @@ struct SolveOptions {
   // every step too (Result::peak_energy_error).
   bool peaks = false;
   SparseMatrix peak_measures;
+  // Estimate every DOF's error relative to its peak from the accepted steps (error_estimate.hpp) into
+  // Result::error_estimate.
+  bool error_estimate = true;
 };
 
 // Columns of Result::energy: dissipated by the viscous laws (dampers), hysteretic by the laws with
@@ -96,6 +99,10 @@ struct Result {
   Vector peak_u, peak_measures;
   // With SolveOptions::peaks and energy: the relative energy balance error over every step (NaN otherwise).
   double peak_energy_error = std::numeric_limits<double>::quiet_NaN();
+  // With SolveOptions::error_estimate: every DOF's estimated max |u_i - u_i,exact| / max |u_i| (see
+  // error_estimate.hpp); NaN entries for a scheme exact on linear modes, whose error it cannot see;
+  // empty when not asked for or the stepper does not name its scheme.
+  Vector error_estimate;
 };
 
 // The energy check's default limit: half the energy scale. A sound run's

@@ -20,6 +20,7 @@
 #include "../base/interrupt.hpp"
 #include "../base/memory.hpp"
 #include "../schemes/stepper.hpp"
+#include "error_estimate.hpp"
 #include "observers.hpp"
 #include "options.hpp"
 
@@ -156,6 +157,12 @@ Status checked_step(Stepper& st, Failure& failure) {
   return s;
 }
 
+// Steppers that name their scheme (every stepper of the registry): the error estimate needs its constants.
+template <class S, class = void>
+struct has_scheme : std::false_type {};
+template <class S>
+struct has_scheme<S, std::void_t<decltype(std::declval<const S&>().scheme())>> : std::true_type {};
+
 struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
@@ -226,6 +233,17 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   }
   std::optional<observe::PeakTracker> peaks;
   if (opt.peaks) peaks.emplace(res, opt, n);
+  std::optional<observe::ErrorEstimate<Model>> estimate;
+  if constexpr (has_scheme<Stepper>::value) {
+    if (opt.error_estimate) {
+      const ErrorConstants& c = cached_error_constants(st.scheme());
+      if (c.available) {
+        estimate.emplace(res, model, c, error_blend(st.scheme()), st.dt(), n);
+      } else {
+        res.error_estimate = Vector::Constant(n, std::numeric_limits<double>::quiet_NaN());
+      }
+    }
+  }
   Index row = 0;
   auto save = [&] {
     history.save(st, row);
@@ -236,6 +254,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   if (energy) energy->start(st);
   save();
   if (peaks) peaks->update(st);
+  if (estimate) estimate->start(st);
 
   const Stats before = st.stats();
   const double bound = std::isnan(opt.max_displacement)
@@ -258,6 +277,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       if (recorder) recorder->shrink(row);
     }
     res.max_residual = max_residual;
+    if (estimate) estimate->finish();
     res.stats = st.stats();
     res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
     res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
@@ -295,6 +315,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       }
       done = i;
       if (peaks) peaks->update(st);
+      if (estimate) estimate->step(st, i);
       if (saving) {
         save();
         to_save = k;

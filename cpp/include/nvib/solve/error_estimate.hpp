@@ -1,0 +1,226 @@
+// The error estimate every run carries (SolveOptions::error_estimate, on by default): an estimate of
+// max_t |u_i(t) - u_i,exact(t)| / max_t |u_i(t)| for every DOF, from the accepted steps alone.
+//
+// The construction. A scheme of global order 2 integrates a linear mode of frequency w with a phase
+// (and amplitude) error per step of c3 (w h)^3 + O(h^4), c3 the scheme's error constant: the distance
+// of its principal eigenvalue from exp(i w h) over (w h)^3 (error_constants() measures it on the
+// scheme's own stepper). The numerical solution of mode j is then the exact one shifted in time by
+// c3 h^2 w_j^2 t, so its error is c3 h^2 w_j^2 t v_j(t), and summed over the modes with their signs
+//     e(t) = c3 h^2 t sum_j w_j^2 v_j(t) = -c3 h^2 t da/dt(t)
+// (free vibration: d3q/dt3 = -w^2 dq/dt). That needs no modes: the jerk da/dt of each DOF is the
+// difference of the accelerations of two accepted steps over h. Summing absolute local errors instead
+// would lose the signs of the modes and under-estimate a many-mode response (by 3x on the six-storey
+// building); the jerk keeps them.
+//
+// Memory. The time t in e(t) is the age of the motion. A damped motion forgets: energy put in decays
+// at the rate lambda = (dissipated power) / (2 x kinetic energy), averaged over the run so far
+// (viscous dampers and the hysteretic dissipation of the laws with memory both count). The age tau
+// follows tau' = 1 - tau lambda / sqrt(2): it grows with t in an undamped run and saturates at
+// sqrt(2)/lambda = 1/(sqrt(2) zeta w), the RMS age of a stationary randomly forced oscillator.
+//     estimate_i = c3 h^2 max_t (tau(t) |da_i/dt(t)|) / max_t |u_i(t)|
+// plus, for a scheme of order 1 (c2 > 0: numerical damping of order w h), c2 h max_t (tau |a_i|) / peak.
+//
+// Generalized-alpha's a_{n+1} carries a sawtooth of period 2h when alpha_m > 0 (its equation holds
+// at the alpha point); the estimate differentiates the alpha-point acceleration
+// (1 - alpha_m) a_{n+1} + alpha_m a_n instead, which has none.
+//
+// What it is not: an estimate of the error of an effect event (a contact opening, a yield point)
+// beyond what the smooth formula sees, nor of an unconverged Newton step (Result::max_residual says
+// that). The committed comparison with the true error is benchmarks/results/error_estimate.md.
+#pragma once
+
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <unordered_map>
+#include <utility>
+
+#include <Eigen/Eigenvalues>
+
+#include "../base/types.hpp"
+#include "../model/model.hpp"
+#include "../schemes/scheme.hpp"
+#include "options.hpp"
+
+namespace nvib {
+
+// Leading error of a scheme's principal eigenvalue on u'' + w^2 u = 0 at Omega = w h:
+// |lambda - exp(i Omega)| = c2 Omega^2 + c3 Omega^3 + O(Omega^4). c2 > 0 only for a first-order scheme.
+struct ErrorConstants {
+  double c2 = 0.0, c3 = 0.0;
+  // False where the scheme is exact on linear modes (the precise integration method): this estimate
+  // then says nothing, and the run reports none.
+  bool available = true;
+};
+
+namespace detail {
+template <class S, class = void>
+struct has_alpha_m : std::false_type {};
+template <class S>
+struct has_alpha_m<S, std::void_t<decltype(std::declval<const S&>().alpha_m)>> : std::true_type {};
+
+// The principal eigenvalue's distance from exp(i Omega), one step of the scheme's stepper on a unit oscillator.
+template <class Scheme>
+double principal_error(const Scheme& scheme, double omega) {
+  using Linear = decltype(make_linear_model(Mass::diagonal(Vector::Ones(1)), Matrix()));
+  typename Scheme::template stepper<Linear> st(
+      scheme, make_linear_model(Mass::diagonal(Vector::Ones(1)), Matrix::Constant(1, 1, omega * omega)), 1.0);
+  st.initialize(0.0, Vector::Zero(1), Vector::Zero(1));
+  const Index m = st.state_size();
+  Matrix A(m, m);
+  Vector e = Vector::Zero(m);
+  for (Index j = 0; j < m; ++j) {
+    e[j] = 1.0;
+    st.set_state(0.0, e);
+    st.step();
+    A.col(j) = st.state();
+    e[j] = 0.0;
+  }
+  const std::complex<double> exact = std::polar(1.0, omega);
+  Eigen::EigenSolver<Matrix> es(A, false);
+  double best = std::numeric_limits<double>::infinity();
+  for (Index k = 0; k < m; ++k) best = std::min(best, std::abs(es.eigenvalues()[k] - exact));
+  return best;
+}
+}  // namespace detail
+
+// The weight of a_n in the acceleration the estimate differentiates (alpha_m for generalized-alpha, else 0).
+template <class Scheme>
+double error_blend(const Scheme& scheme) {
+  if constexpr (detail::has_alpha_m<Scheme>::value) return scheme.alpha_m;
+  (void)scheme;
+  return 0.0;
+}
+
+// c2 and c3 from the principal eigenvalue at Omega = 0.02 and 0.04 (Omega^2 and Omega^3 fitted; the
+// O(Omega^4) remainder changes c3 by under 1 % for the schemes of the registry).
+template <class Scheme>
+ErrorConstants error_constants(const Scheme& scheme) {
+  constexpr double w1 = 0.02, w2 = 0.04;
+  const double e1 = detail::principal_error(scheme, w1), e2 = detail::principal_error(scheme, w2);
+  // e = c2 w^2 + c3 w^3 at both points
+  const double det = w1 * w1 * w2 * w2 * w2 - w2 * w2 * w1 * w1 * w1;
+  ErrorConstants c;
+  c.c2 = (e1 * w2 * w2 * w2 - e2 * w1 * w1 * w1) / det;
+  c.c3 = (w1 * w1 * e2 - w2 * w2 * e1) / det;
+  // A second-order scheme's c2 is round-off; a first-order one's is at least 1e-4 (gamma - 1/2 >= 2e-4).
+  if (std::abs(c.c2) < 1e-6) c.c2 = 0.0;
+  c.c3 = std::abs(c.c3);
+  c.available = c.c2 > 0.0 || c.c3 > 1e-6;
+  return c;
+}
+
+// error_constants() once per scheme and thread (a run of a few hundred steps would otherwise spend a
+// tenth of its time on the two small eigenproblems).
+template <class Scheme>
+const ErrorConstants& cached_error_constants(const Scheme& scheme) {
+  thread_local std::unordered_map<std::string, ErrorConstants> cache;
+  const std::string key = scheme_repr(scheme);
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(key, error_constants(scheme)).first;
+  return it->second;
+}
+
+namespace observe {
+
+// Estimates every DOF's error relative to its peak (see the top of this file) into Result::error_estimate.
+template <class Model>
+class ErrorEstimate {
+ public:
+  // Steps between two samples of the dissipation rate (a product with C and the mass per sample).
+  static constexpr std::int64_t kRateEvery = 16;
+  // Steps between two samples of the jerk and the peaks (every step for generalized-alpha, whose
+  // alpha-point acceleration needs each a_n). The maxima over a run are taken over every 4th step: a
+  // response resolved by the step (some 10 steps a period or more) loses under 10 % of a peak to it
+  // (cos(pi 4/20) = 0.81 in the worst phase at 20 steps a period, the loss averaging out over a run),
+  // and the estimate costs a quarter of the passes over memory.
+  static constexpr std::int64_t kSampleEvery = 4;
+
+  ErrorEstimate(Result& res, Model& model, const ErrorConstants& c, double blend, double h, Index n)
+      : res_(res), model_(model), c_(c), w_(blend), h_(h) {
+    jerk_.setZero(n);
+    level_.setZero(n);
+    peak_.setZero(n);
+    prev_.resize(n);
+    if (w_ != 0.0) blended_.resize(n);
+  }
+  template <class Stepper>
+  void start(const Stepper& st) {
+    prev_ = st.a();
+    if (w_ != 0.0) blended_ = st.a();
+    peak_ = st.u().cwiseAbs();
+    hyst0_ = model_.hysteretic_dissipation();
+  }
+  // jerk, level and peak of every DOF at a sample: now(k) the differentiated acceleration at this
+  // step, before(k) at the step before.
+  template <class Stepper, class Now, class Before>
+  void sample(const Stepper& st, Now now, Before before) {
+    const double tau = age_;
+    const double* u = st.u().data();
+    double *j = jerk_.data(), *l = level_.data(), *pk = peak_.data();
+    const bool level = c_.c2 > 0.0;
+    for (Index k = 0, n = jerk_.size(); k < n; ++k) {
+      const double x = now(k);
+      j[k] = std::max(j[k], tau * std::abs(x - before(k)));
+      if (level) l[k] = std::max(l[k], tau * std::abs(x));
+      pk[k] = std::max(pk[k], std::abs(u[k]));
+    }
+  }
+  template <class Stepper>
+  void step(const Stepper& st, std::int64_t i) {
+    if (i % kRateEvery == 0) {
+      const double twice_kinetic = 2.0 * model_.kinetic(st.v());
+      dissipated_ += model_.dissipated_power(st.v());
+      kinetic_ += twice_kinetic;
+      const double hyst = (model_.hysteretic_dissipation() - hyst0_) / (h_ * kRateEvery);
+      rate_ = kinetic_ > 0.0 ? std::max(0.0, (dissipated_ + hyst) / kinetic_) : 0.0;
+    }
+    age_ += h_ - age_ * h_ * rate_ * kInvSqrt2;
+    const Index n = prev_.size();
+    const double* a = st.a().data();
+    double* p = prev_.data();
+    if (w_ == 0.0) {
+      // Sampled: a_{n-1} is kept at the step before each sample, the jerk and the peak taken at the sample.
+      const std::int64_t phase = i % kSampleEvery;
+      if (phase == kSampleEvery - 1) {
+        for (Index k = 0; k < n; ++k) p[k] = a[k];
+      } else if (phase == 0) {
+        sample(st, [a](Index k) { return a[k]; }, [p](Index k) { return p[k]; });
+      }
+      return;
+    }
+    double* b = blended_.data();
+    const double w = w_;
+    sample(st, [a, p, w](Index k) { return (1.0 - w) * a[k] + w * p[k]; }, [b](Index k) { return b[k]; });
+    for (Index k = 0; k < n; ++k) {
+      b[k] = (1.0 - w) * a[k] + w * p[k];
+      p[k] = a[k];
+    }
+  }
+  // Into the result: per DOF, relative to its peak (a DOF whose peak is under 1e-3 of the largest is
+  // measured against 1e-3 of the largest, as the references measure it).
+  void finish() {
+    const Index n = peak_.size();
+    res_.error_estimate.resize(n);
+    const double floor = n > 0 ? 1e-3 * peak_.maxCoeff() : 0.0;
+    for (Index k = 0; k < n; ++k) {
+      const double scale = std::max(peak_[k], floor);
+      const double e = c_.c3 * h_ * jerk_[k] + c_.c2 * h_ * level_[k];
+      res_.error_estimate[k] = scale > 0.0 ? e / scale : (e > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+    }
+  }
+
+ private:
+  static constexpr double kInvSqrt2 = 0.70710678118654752440;
+  Result& res_;
+  Model& model_;
+  ErrorConstants c_;
+  double w_, h_;
+  Vector prev_, blended_, jerk_, level_, peak_;
+  double age_ = 0.0, rate_ = 0.0, dissipated_ = 0.0, kinetic_ = 0.0, hyst0_ = 0.0;
+};
+
+}  // namespace observe
+}  // namespace nvib
