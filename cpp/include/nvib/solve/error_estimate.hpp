@@ -130,13 +130,14 @@ template <class Model>
 class ErrorEstimate {
  public:
   // Steps between two samples of the dissipation rate (a product with C and the mass per sample).
-  static constexpr std::int64_t kRateEvery = 16;
+  static constexpr std::int64_t kRateEvery = 64;
   // Steps between two samples of the jerk and the peaks (every step for generalized-alpha, whose
-  // alpha-point acceleration needs each a_n). The maxima over a run are taken over every 4th step: a
-  // response resolved by the step (some 10 steps a period or more) loses under 10 % of a peak to it
-  // (cos(pi 4/20) = 0.81 in the worst phase at 20 steps a period, the loss averaging out over a run),
-  // and the estimate costs a quarter of the passes over memory.
-  static constexpr std::int64_t kSampleEvery = 4;
+  // alpha-point acceleration needs each a_n). The maxima over a run are taken over every 8th step, so
+  // that the estimate costs about one pass over memory per step on average: 4 % on a 10^5-DOF chain
+  // (benchmarks/results/error_estimate.md, which compares the estimate so sampled with the true error).
+  // Over a run of many periods the sampled maxima come close to the maxima over every step; a short
+  // event (an impact lasting a few steps) may fall between two samples.
+  static constexpr std::int64_t kSampleEvery = 8;
 
   ErrorEstimate(Result& res, Model& model, const ErrorConstants& c, double blend, double h, Index n)
       : res_(res), model_(model), c_(c), w_(blend), h_(h) {
@@ -152,6 +153,25 @@ class ErrorEstimate {
     if (w_ != 0.0) blended_ = st.a();
     peak_ = st.u().cwiseAbs();
     hyst0_ = model_.hysteretic_dissipation();
+  }
+  // The age of the motion at step i: tau' = 1 - tau / T over the steps since the last call, T = sqrt(2) /
+  // rate (rate: the dissipation rate, sampled every kRateEvery steps; tau grows as t where it is 0).
+  template <class Stepper>
+  void age_to(const Stepper& st, std::int64_t i) {
+    if (i / kRateEvery != aged_ / kRateEvery) {
+      dissipated_ += model_.dissipated_power(st.v());
+      kinetic_ += 2.0 * model_.kinetic(st.v());
+      const double hyst = (model_.hysteretic_dissipation() - hyst0_) / (h_ * kRateEvery);
+      rate_ = kinetic_ > 0.0 ? std::max(0.0, (dissipated_ + hyst) / kinetic_) : 0.0;
+    }
+    const double span = h_ * static_cast<double>(i - aged_);
+    aged_ = i;
+    if (rate_ > 0.0) {
+      const double T = kSqrt2 / rate_;
+      age_ = T + (age_ - T) * std::exp(-span / T);
+    } else {
+      age_ += span;
+    }
   }
   // jerk, level and peak of every DOF at a sample: now(k) the differentiated acceleration at this
   // step, before(k) at the step before.
@@ -170,27 +190,21 @@ class ErrorEstimate {
   }
   template <class Stepper>
   void step(const Stepper& st, std::int64_t i) {
-    if (i % kRateEvery == 0) {
-      const double twice_kinetic = 2.0 * model_.kinetic(st.v());
-      dissipated_ += model_.dissipated_power(st.v());
-      kinetic_ += twice_kinetic;
-      const double hyst = (model_.hysteretic_dissipation() - hyst0_) / (h_ * kRateEvery);
-      rate_ = kinetic_ > 0.0 ? std::max(0.0, (dissipated_ + hyst) / kinetic_) : 0.0;
-    }
-    age_ += h_ - age_ * h_ * rate_ * kInvSqrt2;
+    const std::int64_t phase = i % kSampleEvery;
     const Index n = prev_.size();
     const double* a = st.a().data();
     double* p = prev_.data();
     if (w_ == 0.0) {
       // Sampled: a_{n-1} is kept at the step before each sample, the jerk and the peak taken at the sample.
-      const std::int64_t phase = i % kSampleEvery;
       if (phase == kSampleEvery - 1) {
         for (Index k = 0; k < n; ++k) p[k] = a[k];
       } else if (phase == 0) {
+        age_to(st, i);
         sample(st, [a](Index k) { return a[k]; }, [p](Index k) { return p[k]; });
       }
       return;
     }
+    age_to(st, i);
     double* b = blended_.data();
     const double w = w_;
     sample(st, [a, p, w](Index k) { return (1.0 - w) * a[k] + w * p[k]; }, [b](Index k) { return b[k]; });
@@ -213,13 +227,14 @@ class ErrorEstimate {
   }
 
  private:
-  static constexpr double kInvSqrt2 = 0.70710678118654752440;
+  static constexpr double kSqrt2 = 1.41421356237309504880;
   Result& res_;
   Model& model_;
   ErrorConstants c_;
   double w_, h_;
   Vector prev_, blended_, jerk_, level_, peak_;
   double age_ = 0.0, rate_ = 0.0, dissipated_ = 0.0, kinetic_ = 0.0, hyst0_ = 0.0;
+  std::int64_t aged_ = 0;  // the step the age is of
 };
 
 }  // namespace observe
