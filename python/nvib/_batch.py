@@ -40,7 +40,9 @@ class RunSummary:
     """What ``keep="peaks"`` keeps of a run: its status and message, the peak |u| of every DOF, the peak
     |d| of every named effect's measure (a storey's drift), the final state, the largest relative energy
     balance error (with ``energy=True``), the counters and the wall time. ``label`` says what the run was.
-    The peaks and the energy error are over every step of the run, whatever ``save_every``."""
+    The peaks and the energy error are over every step of the run, whatever ``save_every``.
+    ``error_estimate``: the run's estimated error, the largest over its DOFs (``Result.error_estimate``;
+    None when switched off or not available for the scheme); ``warnings``: the run's ``Result.warnings``."""
 
     label: dict
     status: Status | None
@@ -53,6 +55,8 @@ class RunSummary:
     energy_error: float | None
     stats: object
     wall_time: float
+    error_estimate: float | None = None
+    warnings: list = dataclasses.field(default_factory=list)
 
     @property
     def success(self) -> bool:
@@ -76,7 +80,8 @@ class RunError:
 
 class Batch(list):
     """The results of ``solve_many`` in input order (a Result or RunSummary per run, or a RunError),
-    with ``labels`` (what each run was: its index, ground motion, scale, varied parameters, scheme)."""
+    with ``labels`` (what each run was: its index, ground motion, scale, varied parameters, scheme) and
+    ``error_estimates`` (each run's estimated error); its repr names the run with the largest."""
 
     def __init__(self, results, labels):
         super().__init__(results)
@@ -86,6 +91,27 @@ class Batch(list):
     def failed(self) -> list[int]:
         """Indices of the runs that did not succeed (None: a run an interrupt kept from starting)."""
         return [k for k, r in enumerate(self) if r is None or not r.success]
+
+    @property
+    def error_estimates(self) -> np.ndarray:
+        """Each run's estimated error (the largest over its DOFs, ``Result.error_estimate``); NaN for a run
+        without one (not made, switched off, a scheme it does not cover)."""
+        out = np.full(len(self), np.nan)
+        for k, r in enumerate(self):
+            e = getattr(r, "error_estimate", None)
+            if isinstance(r, RunSummary):
+                out[k] = np.nan if e is None else e
+            elif e is not None and e.available:
+                out[k] = e.max
+        return out
+
+    def __repr__(self) -> str:
+        est = self.error_estimates
+        line = f"Batch of {len(self)} run{'s' if len(self) != 1 else ''}, {len(self.failed)} not succeeded"
+        if np.any(~np.isnan(est)):
+            k = int(np.nanargmax(est))
+            line += f"; largest error estimate {est[k]:.2g} (run {k}: {self.labels[k]})"
+        return line
 
     def __reduce__(self):
         return (Batch, (list(self), self.labels))
@@ -244,8 +270,10 @@ def _summary(model: Model, res, label: dict, layout=None) -> RunSummary:
     else:
         err = float(res.energy.relative_balance_error()) if res.energy is not None else None
     msg = res.failure.message if res.failure is not None else ""
+    est = res.error_estimate
     return RunSummary(label, res.status, msg, peak_u, measures, float(res.t[-1]), u[-1].copy(), res.v[-1].copy(),
-                      err, res.stats, res.stats.wall_time)
+                      err, res.stats, res.stats.wall_time, est.max if est is not None and est.available else None,
+                      list(res.warnings))
 
 
 def _run_one(model, motion, scale, changes, label, scheme, own, keep, options):

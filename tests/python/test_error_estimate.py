@@ -130,3 +130,15 @@ def test_the_precise_integration_method_says_it_has_no_estimate():
     est = nvib.solve(model, nvib.PreciseIntegration(), dt=7e-4, t_end=0.1).error_estimate
     assert not est.available and math.isnan(est.max) and est.dof is None
     assert math.isnan(est.dt_for(1e-3))
+
+
+def test_solve_many_reports_every_runs_estimate():
+    model = nvib.load_scene("building")
+    for keep in ("history", "peaks"):
+        batch = nvib.solve_many(model, nvib.Newmark(), dt=7e-4, t_end=2.0, scales=[1.0, 3.0], keep=keep)
+        alone = [nvib.solve(nvib._batch._derived(model, None, s, {}), nvib.Newmark(), dt=7e-4, t_end=2.0)
+                 for s in (1.0, 3.0)]
+        np.testing.assert_array_equal(batch.error_estimates, [r.error_estimate.max for r in alone])
+        assert f"largest error estimate {max(r.error_estimate.max for r in alone):.2g}" in repr(batch)
+    pim = nvib.solve_many(model, nvib.PreciseIntegration(), dt=7e-4, t_end=0.1, scales=[1.0], keep="peaks")
+    assert np.isnan(pim.error_estimates).all() and pim[0].error_estimate is None
