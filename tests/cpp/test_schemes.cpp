@@ -309,5 +309,30 @@ int main() {
     CHECK(sparse.peak_measures[0] == (full.u.col(1) - full.u.col(0)).cwiseAbs().maxCoeff());
     CHECK(full.peak_u.size() == 0 && std::isnan(full.peak_energy_error));  // not asked for
   }
+  // The error estimate's constants: the principal eigenvalue's distance from exp(i w h) over (w h)^3 is
+  // 1/24 for central differences (period error -(w h)^2/24) and 1/12 for the trapezoidal rule; a
+  // first-order Newmark (gamma > 1/2) has a c2, and PIM, exact on linear modes, none.
+  {
+    const auto cd = nvib::error_constants(nvib::CentralDifference());
+    const auto nm = nvib::error_constants(nvib::Newmark());
+    const auto damped = nvib::error_constants(nvib::Newmark(0.3025, 0.6));
+    const auto pim = nvib::error_constants(nvib::PreciseIntegration());
+    CHECK(std::abs(cd.c3 - 1.0 / 24.0) < 1e-3 / 24.0 && cd.c2 == 0.0 && cd.available);
+    CHECK(std::abs(nm.c3 - 1.0 / 12.0) < 1e-3 / 12.0 && nm.c2 == 0.0 && nm.available);
+    CHECK(std::abs(damped.c2 - 0.05) < 1e-3 && damped.available);  // (gamma - 1/2) / 2
+    CHECK(!pim.available);
+    // On by default, one value per DOF, NaN for PIM; off when asked.
+    auto model = nvib::make_model(nvib::Mass::diagonal(Vector::Ones(2)), Hardening{});
+    const Vector u0 = (Vector(2) << 1.5, -0.4).finished(), v0 = Vector::Zero(2);
+    const auto on = nvib::solve(model, nvib::Newmark(), 1e-3, 1.0, u0, v0);
+    CHECK(on.error_estimate.size() == 2 && on.error_estimate.allFinite() && on.error_estimate.maxCoeff() > 0.0);
+    const auto coarse = nvib::solve(model, nvib::Newmark(), 2e-3, 1.0, u0, v0);
+    const double ratio = coarse.error_estimate.maxCoeff() / on.error_estimate.maxCoeff();
+    CHECK(ratio > 3.0 && ratio < 5.0);  // second order: 4
+    CHECK(nvib::solve(model, nvib::PreciseIntegration(), 1e-3, 0.1, u0, v0).error_estimate.array().isNaN().all());
+    nvib::SolveOptions off;
+    off.error_estimate = false;
+    CHECK(nvib::solve(model, nvib::Newmark(), 1e-3, 0.1, u0, v0, off).error_estimate.size() == 0);
+  }
   return nvib_test::finish("test_schemes");
 }
