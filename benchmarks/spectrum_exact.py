@@ -32,7 +32,6 @@ import datetime
 import math
 import os
 import platform
-import subprocess
 import sys
 import time
 
@@ -206,20 +205,9 @@ def run_rotd(ag, periods) -> list:
 # ---- the report ---------------------------------------------------------------------------------
 
 def machine() -> list[str]:
-    cpu = platform.processor() or "?"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    try:
-        commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True,
-                                text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
-                               capture_output=True, text=True, check=True).stdout.strip()
-        commit += "-dirty" if dirty else ""
-    except (OSError, subprocess.CalledProcessError):
-        commit = "?"
+    from building import cpu_name, git_revision
+
+    cpu, commit = cpu_name(), git_revision()
     import eqsig
     import pyrotd
     import scipy
