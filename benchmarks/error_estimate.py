@@ -123,10 +123,18 @@ def overhead(repeats: int) -> list[dict]:
     return out
 
 
+def machine() -> list[str]:
+    from building import cpu_name, git_revision
+
+    return [f"- CPU: {cpu_name()}, {os.cpu_count()} logical CPUs; {platform.system()} {platform.release()}; "
+            f"1-minute load average at the end {os.getloadavg()[0]:.2f}",
+            f"- nvib {nvib.__version__} (git {git_revision()}), Python {platform.python_version()}, "
+            f"NumPy {np.__version__}"]
+
+
 def markdown(rows, refs, costs) -> str:
-    lines = ["# Error estimate against the true error", "",
-             f"nvib {nvib.__version__}, Python {platform.python_version()}, {platform.machine()}, "
-             f"{os.cpu_count()} cores. `python benchmarks/error_estimate.py`.", "",
+    lines = ["# Error estimate against the true error", "", "`python benchmarks/error_estimate.py`", "",
+             *machine(), "",
              "true: max over DOFs of max_t |u - u_ref| / max_t |u_ref| (peaks under 1e-3 of the largest floored "
              "there); estimate: `Result.error_estimate.max`; within 3: the estimate within a factor 3 of the true "
              "error (asked where the true error is below 0.3); warned: a `warnings` entry (warn_error = 1 %).", "",

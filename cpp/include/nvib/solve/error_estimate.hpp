@@ -112,8 +112,8 @@ ErrorConstants error_constants(const Scheme& scheme) {
   return c;
 }
 
-// error_constants() once per scheme and thread (a run of a few hundred steps would otherwise spend a
-// tenth of its time on the two small eigenproblems).
+// error_constants() once per scheme and thread: a batch of short runs of one scheme (an inelastic
+// spectrum's) solves the two small eigenproblems once, not once a run.
 template <class Scheme>
 const ErrorConstants& cached_error_constants(const Scheme& scheme) {
   thread_local std::unordered_map<std::string, ErrorConstants> cache;
@@ -133,7 +133,7 @@ class ErrorEstimate {
   static constexpr std::int64_t kRateEvery = 64;
   // Steps between two samples of the jerk and the peaks (every step for generalized-alpha, whose
   // alpha-point acceleration needs each a_n). The maxima over a run are taken over every 8th step, so
-  // that the estimate costs about one pass over memory per step on average: 4 % on a 10^5-DOF chain
+  // that the estimate costs about one pass over memory per step on average: 8 % of an LCDM run on a 10^5-DOF chain
   // (benchmarks/results/error_estimate.md, which compares the estimate so sampled with the true error).
   // Over a run of many periods the sampled maxima come close to the maxima over every step; a short
   // event (an impact lasting a few steps) may fall between two samples.
