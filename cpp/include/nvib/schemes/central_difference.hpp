@@ -112,6 +112,22 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
     detail::for_each_index(n, [=](Index i) { v[i] += hh * (a[i] + an[i]); });
   }
 
+  // Variable steps: the synchronized form is one-step; half_step carries v_{n-1/2}, and its next kick
+  // must be (h_{n-1} + h_n)/2 a_n, so the carried velocity is moved by (h_{n-1} - h_n)/2 a_n.
+  void set_dt(double h) {
+    if (h == h_) return;
+    if (scheme_.velocity == CentralDifference::Velocity::half_step && !first_) v_ += (0.5 * (h_ - h)) * a_;
+    Base::set_dt(h);
+  }
+  void checkpoint() {
+    Base::checkpoint();
+    ck_first_ = first_;
+  }
+  void rollback() {
+    Base::rollback();
+    first_ = ck_first_;
+  }
+
   // State: [u; v; a]; with velocity = half_step, v is the carried v_{n-1/2}
   // and the next step is a full kick from it.
   void set_state(double t, const Vector& x) {
@@ -122,7 +138,7 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
  private:
   CentralDifference scheme_;
   Vector anew_, vstar_;
-  bool first_ = true;
+  bool first_ = true, ck_first_ = true;
 };
 
 }  // namespace nvib

@@ -168,6 +168,19 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     return this->advance(p_.alpha_f == 0.0);
   }
 
+  // Variable steps: the scheme is one-step (u, v, a); its iteration matrix holds 1/h^2 and 1/h, so a
+  // new step length is refactorised (the initial-tangent mode's too, at the state it changes at).
+  void set_dt(double h) {
+    if (h == h_) return;
+    Base::set_dt(h);
+    newton_.reset();
+  }
+  void rollback() {
+    const double h = h_;
+    Base::rollback();
+    if (h_ != h) newton_.reset();
+  }
+
   // Residual of the last accepted step relative to its force scale:
   // ||r||inf / (f + atol/rtol), f the largest inertia or force term, so at
   // most rtol after Newton converges; the equilibrium error left by the

@@ -85,7 +85,7 @@ struct PimCost {
 };
 inline PimCost pim_cost(Index n, const PreciseIntegration& s) {
   const double N = 2.0 * static_cast<double>(n), q = s.interpolation + 1.0;
-  const double propagators = 2.0 * q * N * (N + q * static_cast<double>(n));  // Ppred_, Pcorr_
+  const double propagators = 2.0 * q * N * (N + q * static_cast<double>(n));  // the predictor and corrector propagators
   const double moments = 3.0 * (q + 1.0) * N * N;                            // exponential, moments, temporaries
   return {8.0 * (propagators + moments), 2.0 * (q + 1.0) * N * N * N * (s.squarings + 2.0)};
 }
@@ -157,14 +157,14 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     z_.tail(n * q) = Eigen::Map<const Vector>(R_.data(), n * q);
     // Predictor: extrapolate the history.
     const Index mp = std::min<Index>(q, nhist_);
-    x_.noalias() = Ppred_[static_cast<size_t>(mp - 1)] * z_;
+    x_.noalias() = cache_[active_].pred[static_cast<size_t>(mp - 1)] * z_;
     for (int c = 0; c < p_.corrections; ++c) {
       evaluate(t1);
       // Corrector: interpolate through r(x~_{n+1}) and the history: z = [x_n; r~_{n+1}; r_n; ..].
       const Index mc = std::min<Index>(q, nhist_ + 1);
       z_.segment(N, n) = rnew_;
       if (q > 1) z_.tail(n * (q - 1)) = Eigen::Map<const Vector>(R_.data(), n * (q - 1));
-      x_.noalias() = Pcorr_[static_cast<size_t>(mc - 1)] * z_;
+      x_.noalias() = cache_[active_].corr[static_cast<size_t>(mc - 1)] * z_;
     }
     evaluate(t1);
     // Shift the history (newest first).
@@ -190,16 +190,64 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     x_.tail(n) = v_;
     nhist_ = R_.cols();
   }
-  const Matrix& transition() const { return T_; }
+  const Matrix& transition() const { return cache_[active_].T; }
+
+
+  // Variable steps: the remainders of the history, known at t_n, t_n - h, t_n - 2h, .., are moved to the
+  // nodes of the new step h' by the polynomial through them (the interpolation the scheme itself
+  // makes), and the propagators of h' come from a cache of the last few step lengths (an exponential
+  // each: a step length used before costs nothing).
+  void set_dt(double h) {
+    if (h == h_) return;
+    const Index m = nhist_;
+    if (m > 1) {
+      const double r = h / h_;
+      Matrix moved = Matrix::Zero(R_.rows(), R_.cols());
+      moved.col(0) = R_.col(0);
+      for (Index k = 1; k < m; ++k) {
+        const double y = -static_cast<double>(k) * r;
+        for (Index j = 0; j < m; ++j) {
+          double w = 1.0;
+          for (Index l = 0; l < m; ++l)
+            if (l != j) w *= (y + static_cast<double>(l)) / (static_cast<double>(l) - static_cast<double>(j));
+          moved.col(k) += w * R_.col(j);
+        }
+      }
+      R_ = moved;
+    }
+    Base::set_dt(h);
+    use_propagators();
+  }
+  void checkpoint() {
+    Base::checkpoint();
+    ck_R_ = R_;
+    ck_nhist_ = nhist_;
+  }
+  void rollback() {
+    const double h = h_;
+    Base::rollback();
+    R_ = ck_R_;
+    nhist_ = ck_nhist_;
+    x_.head(this->size()) = u_;
+    x_.tail(this->size()) = v_;
+    if (h_ != h) use_propagators();
+  }
 
  private:
+  // The propagators of a step length: T = e^{hH} and the predictor and corrector matrices (T folded with
+  // the interpolation weights, see make_propagators), one per number of known points.
+  struct Propagators {
+    double h = 0.0;
+    Matrix T;
+    std::vector<Matrix> pred, corr;
+  };
   // T = e^{hH} and the moment integrals W_k = k! h^{-k} int_0^h e^{H(h-s)} s^k ds
   // (velocity columns: r has a zero top half), folded with the interpolation
   // weights into one matrix per predictor and corrector variant:
   //   x_{n+1} = T x_n + sum_k W_k c_k,  c = R L  =>  x_{n+1} = [T | W'_0 | W'_1 | ..] [x_n; r_0; r_1; ..]
   // with W'_j = sum_k L(j, k) W_k: one matrix-vector product per pass.
   void build_propagators(double t0) {
-    const Index n = this->size(), N = 2 * n, q = p_.interpolation + 1;
+    const Index n = this->size(), N = 2 * n;
     Matrix K0(n, n), C0(n, n);
     Vector zero = Vector::Zero(n);
     model_.tangent(zero, zero, t0, K0, C0, stats_);
@@ -215,32 +263,53 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     H.bottomLeftCorner(n, n) = -MK;
     H.bottomRightCorner(n, n) = -MC;
     Hlo_ = H.bottomRows(n);
+    H_ = H;
+    cache_.clear();
+    use_propagators();
+    ready_ = true;
+  }
+
+  // The propagators of the step h_: from the cache of the last kCached step lengths, else built.
+  void use_propagators() {
+    for (std::size_t k = 0; k < cache_.size(); ++k)
+      if (cache_[k].h == h_) {
+        active_ = k;
+        return;
+      }
+    if (cache_.size() >= kCached) cache_.erase(cache_.begin());
+    cache_.push_back(make_propagators(h_));
+    active_ = cache_.size() - 1;
+  }
+
+  Propagators make_propagators(double h) {
+    const Index n = this->size(), N = 2 * n, q = p_.interpolation + 1;
+    Propagators out;
+    out.h = h;
     // First block row of the exponential of h [[H, I, 0, ..], [0, 0, I, ..], ..] (Van Loan 1978).
     std::vector<Matrix> F;
-    T_ = expm_increment_with_moments(h_ * H, h_, static_cast<int>(q), F, p_.squarings);
-    T_.diagonal().array() += 1.0;
+    Matrix T = expm_increment_with_moments(h * H_, h, static_cast<int>(q), F, p_.squarings);
+    T.diagonal().array() += 1.0;
     ++stats_.num_expm;
     std::vector<Matrix> W;
     double fact = 1.0;
     for (Index k = 0; k < q; ++k) {
       if (k > 0) fact *= static_cast<double>(k);
-      W.push_back(fact / std::pow(h_, static_cast<double>(k)) * F[static_cast<size_t>(k)].rightCols(n));
+      W.push_back(fact / std::pow(h, static_cast<double>(k)) * F[static_cast<size_t>(k)].rightCols(n));
     }
     auto fold = [&](const Matrix& L) {
       Matrix P = Matrix::Zero(N, N + n * q);
-      P.leftCols(N) = T_;
+      P.leftCols(N) = T;
       for (Index j = 0; j < q; ++j)
         for (Index k = 0; k < q; ++k)
           if (L(j, k) != 0.0) P.block(0, N + j * n, N, n) += L(j, k) * W[static_cast<size_t>(k)];
       return P;
     };
-    Ppred_.clear();
-    Pcorr_.clear();
     for (Index m = 0; m < q; ++m) {
-      Ppred_.push_back(fold(Lpred_[static_cast<size_t>(m)]));
-      Pcorr_.push_back(fold(Lcorr_[static_cast<size_t>(m)]));
+      out.pred.push_back(fold(Lpred_[static_cast<size_t>(m)]));
+      out.corr.push_back(fold(Lcorr_[static_cast<size_t>(m)]));
     }
-    ready_ = true;
+    out.T = std::move(T);
+    return out;
   }
 
   // Evaluates the force at x_ (time t1): sets u_, v_, a_ and the remainder rnew_.
@@ -261,12 +330,14 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
 
   PreciseIntegration p_;
   bool ready_ = false;
-  Matrix T_, Hlo_;
+  Matrix H_, Hlo_;
   std::vector<Matrix> Lpred_, Lcorr_;  // interpolation weights per number of known points
-  std::vector<Matrix> Ppred_, Pcorr_;  // the propagators folded with them (see build_propagators)
+  static constexpr std::size_t kCached = 4;
+  std::vector<Propagators> cache_;
+  std::size_t active_ = 0;
   Vector x_, z_, rnew_;
-  Matrix R_;
-  Index nhist_ = 0;
+  Matrix R_, ck_R_;
+  Index nhist_ = 0, ck_nhist_ = 0;
 };
 
 }  // namespace nvib

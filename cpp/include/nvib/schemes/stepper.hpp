@@ -7,6 +7,7 @@
 #pragma once
 
 #include <utility>
+#include <vector>
 
 #include "../base/types.hpp"
 #include "../model/model.hpp"
@@ -34,7 +35,7 @@ class StepperBase {
     a_.setZero(n);
   }
 
-  double time() const { return t0_ + static_cast<double>(n_) * h_; }
+  double time() const { return t0_ + static_cast<double>(nt_) * h_; }
   std::int64_t step_index() const { return n_; }
   double dt() const { return h_; }
   Index size() const { return model_.size(); }
@@ -46,6 +47,41 @@ class StepperBase {
   const Failure& failure() const { return failure_; }
   ModelT& model() { return model_; }
   const ModelT& model() const { return model_; }
+
+  // Variable steps (adaptive runs, solve/adaptive.hpp). set_dt(h) makes the next steps h long from the
+  // current time on; a stepper that carries a history at its step (a_{n-1}, PIM's remainders) hides it
+  // with its own, which rescales that history first. checkpoint() keeps the state at an accepted step,
+  // rollback() restores it exactly, step length included (the laws' committed internal variables too):
+  // a step that is then retaken equals one taken without the detour.
+  void set_dt(double h) {
+    if (h == h_) return;
+    check_time_step(h);
+    t0_ = time();
+    nt_ = 0;
+    h_ = h;
+  }
+  void checkpoint() {
+    ck_.u = u_;
+    ck_.v = v_;
+    ck_.a = a_;
+    ck_.t0 = t0_;
+    ck_.h = h_;
+    ck_.n = n_;
+    ck_.nt = nt_;
+    ck_.laws.resize(model_.state_size());
+    model_.get_state(ck_.laws.data());
+  }
+  void rollback() {
+    u_ = ck_.u;
+    v_ = ck_.v;
+    a_ = ck_.a;
+    t0_ = ck_.t0;
+    h_ = ck_.h;
+    n_ = ck_.n;
+    nt_ = ck_.nt;
+    model_.set_state(ck_.laws.data());
+    failure_ = Failure{};
+  }
 
   // The carried state as one vector: [u; v; a] (3n), followed by the history
   // a scheme keeps (its stepper documents it) and the committed internal
@@ -99,6 +135,7 @@ class StepperBase {
     const Index n = size();
     t0_ = t;
     n_ = 0;
+    nt_ = 0;
     u_ = x.segment(0, n);
     v_ = x.segment(n, n);
     a_ = x.segment(2 * n, n);
@@ -120,6 +157,7 @@ class StepperBase {
     check_initial(t0, u0, v0);
     t0_ = t0;
     n_ = 0;
+    nt_ = 0;
     u_ = u0;
     v_ = v0;
     failure_ = Failure{};
@@ -133,13 +171,14 @@ class StepperBase {
   }
 
   // Time the step under way is heading for (computed, never accumulated).
-  double next_time() const { return t0_ + static_cast<double>(n_ + 1) * h_; }
+  double next_time() const { return t0_ + static_cast<double>(nt_ + 1) * h_; }
 
   // Bookkeeping at the end of a successful step, and the one commit of the laws with memory at the
   // accepted state {u, v} at the step's end. last_evaluation: the scheme's last force evaluation was
   // at that state (its trial is committed as it is); otherwise a new trial is made there.
   Status advance(bool last_evaluation = true) {
     ++n_;
+    ++nt_;
     ++stats_.num_steps;
     model_.commit(u_, v_, time(), last_evaluation);
     return Status::success;
@@ -153,8 +192,15 @@ class StepperBase {
 
   ModelT model_;
   double h_ = 0.0;
-  double t0_ = 0.0;
-  std::int64_t n_ = 0;
+  double t0_ = 0.0;     // the time the current step length began at
+  std::int64_t n_ = 0;  // steps since the start (or set_state)
+  std::int64_t nt_ = 0; // steps since t0_: time() = t0_ + nt_ h_, computed, never accumulated
+  struct Checkpoint {
+    Vector u, v, a;
+    std::vector<double> laws;
+    double t0 = 0.0, h = 0.0;
+    std::int64_t n = 0, nt = 0;
+  } ck_;
   Vector u_, v_, a_;
   Stats stats_;
   Failure failure_;

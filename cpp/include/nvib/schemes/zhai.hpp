@@ -79,6 +79,23 @@ class ZhaiStepper : public StepperBase<ModelT> {
     });
   }
 
+  // Variable steps: a_{n-1} enters as the slope (a_n - a_{n-1}) / h; a new step h' keeps that slope by
+  // carrying a_n - (h'/h) (a_n - a_{n-1}), the value a_{n-1} would have had a step of h' before.
+  void set_dt(double h) {
+    if (h == h_) return;
+    const double r = h / h_;
+    aprev_ = a_ - r * (a_ - aprev_);
+    Base::set_dt(h);
+  }
+  void checkpoint() {
+    Base::checkpoint();
+    ck_aprev_ = aprev_;
+  }
+  void rollback() {
+    Base::rollback();
+    aprev_ = ck_aprev_;
+  }
+
   // State: [u; v; a; a_{n-1}; internal variables of the laws with memory].
   Index state_size() const { return this->size_with(this->size()); }
   Vector state() const { return this->state_with(aprev_); }
@@ -86,6 +103,7 @@ class ZhaiStepper : public StepperBase<ModelT> {
 
  private:
   Zhai scheme_;
+  Vector ck_aprev_;
   Vector aprev_;
 };
 
