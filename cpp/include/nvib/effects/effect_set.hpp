@@ -278,6 +278,42 @@ class EffectSet {
     return false;
   }
 
+  // The effects whose laws declare where their force is not smooth (law::has_event), and their event
+  // values at (u, v, t) from the committed states in `committed` (a buffer of state_size() doubles), in
+  // the order of the groups.
+  Index num_events() const {
+    Index count = 0;
+    for (const kernels::Group& g : c_->groups())
+      if (dispatch(g.law, [](auto L) { return law::has_event<decltype(L)>::value; })) count += static_cast<Index>(g.size);
+    return count;
+  }
+  void events(const double* u, const double* v, double t, const double* committed, double* out) const {
+    Index q = 0;
+    for (const kernels::Group& g : c_->groups())
+      dispatch(g.law, [&](auto L) {
+        using Lw = decltype(L);
+        if constexpr (law::has_event<Lw>::value) {
+          for (std::size_t k = 0; k < g.size; ++k) {
+            const double d = Lw::uses_displacement ? g.measure(k, u) : 0.0;
+            const double dd = Lw::uses_velocity ? g.measure(k, v) : 0.0;
+            out[q++] = Lw::event(g.template params_of<Lw>(k), g.template state_of<Lw>(committed, k), d, dd, t);
+          }
+        }
+      });
+  }
+  // The description of event k (num_events() order): its law, name and index.
+  std::string describe_event(Index which) const {
+    Index q = 0;
+    const auto& groups = c_->groups();
+    for (std::size_t gi = 0; gi < groups.size(); ++gi) {
+      const kernels::Group& g = groups[gi];
+      if (!dispatch(g.law, [](auto L) { return law::has_event<decltype(L)>::value; })) continue;
+      if (which < q + static_cast<Index>(g.size)) return c_->describe(gi, static_cast<std::size_t>(which - q));
+      q += static_cast<Index>(g.size);
+    }
+    return "?";
+  }
+
   // Energy accounting over the effects evaluated each step and the constant loads; the model adds
   // what K and C carry. With memory: the stored (recoverable) energy at the committed state.
   double potential(const CVecRef& u, double t) const {

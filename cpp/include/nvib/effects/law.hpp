@@ -213,6 +213,15 @@ double dissipated_power(const params_t<L>& p, double dd) {
   return 0.0;
 }
 
+// Where the force is not smooth (a contact opening or closing, a gap closing, a yield point): a law
+// may declare event(p, committed, d, d', t), a value whose sign changes there (from the committed
+// state of the step's start). Adaptive runs land their steps on such points instead of straddling them.
+template <class L, class = void>
+struct has_event : std::false_type {};
+template <class L>
+struct has_event<L, std::void_t<decltype(L::event(std::declval<const params_t<L>&>(), std::declval<const state_t<L>&>(),
+                                                   0.0, 0.0, 0.0))>> : std::true_type {};
+
 }  // namespace law
 
 // The registry of laws: the runtime tag of a law is its position in the list.

@@ -59,6 +59,12 @@ struct Bilinear : LawBase {
     }
     return r;
   }
+  // The yield point: the elastic trial's margin to the yield surface, fy - |k (d - dp) - H dp|, over fy
+  // (positive inside, 0 on it). Reversal from yielding needs no event: the slope changes where d' = 0, so
+  // the force stays smooth in time.
+  static double event(const Params& p, const State& c, double d, double, double) {
+    return (p.fy - std::abs(p.k * (d - c.dp) - p.H * c.dp)) / p.fy;
+  }
   // The spring's energy and the back spring's (given back by a reversed slip).
   static double recoverable(const Params& p, const State& s, double d) {
     const double e = d - s.dp;

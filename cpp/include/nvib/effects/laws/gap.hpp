@@ -27,6 +27,8 @@ struct Gap : LawBase {
     const double c = d + p.gap;
     return d < -p.gap ? 0.5 * p.k * c * c : 0.0;
   }
+  // The gap closes and opens where d + gap crosses 0 (the slope jumps from 0 to k).
+  static double event(const Params& p, const NoState&, double d, double, double) { return d + p.gap; }
   static bool is_linear(const Params&) { return false; }
 };
 

@@ -39,6 +39,9 @@ struct HertzContact : LawBase {
   static double input_power(const Params& p, double d, double dd, double t, int side) {
     return p.r ? -value(p, d, dd, t) * p.r->derivative(t, side) : 0.0;
   }
+  // The contact opens and closes where the compression d - r(t) crosses 0 (the force's second derivative is
+  // unbounded there).
+  static double event(const Params& p, const NoState&, double d, double, double t) { return compression(p, d, t); }
   static bool is_linear(const Params&) { return false; }
   static bool uses_time(const Params& p) { return p.r != nullptr; }
 };

@@ -26,6 +26,8 @@ struct Hook : LawBase {
     const double e = d - p.slack;
     return d > p.slack ? 0.5 * p.k * e * e : 0.0;
   }
+  // The slack is taken up and given back where d - slack crosses 0 (the slope jumps from 0 to k).
+  static double event(const Params& p, const NoState&, double d, double, double) { return d - p.slack; }
   static bool is_linear(const Params&) { return false; }
 };
 
