@@ -247,6 +247,40 @@ void failed_steps() {
 
 }  // namespace
 
+// Adaptive steps: a step retaken after a rejection equals the step taken once. reject_every = 3 tries
+// every third step first at twice its length (rescaling the scheme's history, refactorising, committing
+// the laws' trial states) and rejects it whatever its error; the accepted steps must be the same bit
+// for bit, on the chain of every law with memory, its bilinear storeys landing on their yield points.
+template <class Scheme>
+void rejections_leave_no_trace(const Scheme& scheme, const char* what) {
+  const auto model = hysteretic_chain();
+  const Index n = model.size();
+  nvib::SolveOptions opt;
+  opt.tol = 1e-3;
+  const auto once = nvib::solve(model, scheme, 2e-3, 1.0, Vector::Zero(n), Vector::Zero(n), opt);
+  opt.reject_every = 3;
+  const auto detours = nvib::solve(model, scheme, 2e-3, 1.0, Vector::Zero(n), Vector::Zero(n), opt);
+  CHECK(once.status == nvib::Status::success && detours.status == nvib::Status::success);
+  CHECK(once.t.size() == detours.t.size() && once.t.size() > 100);
+  const bool same = once.t == detours.t && once.u == detours.u && once.v == detours.v && once.a == detours.a &&
+                    once.error_estimate == detours.error_estimate;
+  CHECK(same);
+  CHECK(detours.stats.num_rejected_steps >= once.stats.num_rejected_steps + once.stats.num_steps / 3);
+  CHECK(once.stats.num_events >= 3);  // the storeys' yield points (5 in every scheme's run)
+  std::printf("test_memory: %s adaptive (tol 1e-3): %lld steps, %lld events; with a rejected detour every third "
+              "step the same bit for bit: %s\n", what, static_cast<long long>(once.stats.num_steps),
+              static_cast<long long>(once.stats.num_events), same ? "yes" : "NO");
+}
+
+void rejections() {
+  rejections_leave_no_trace(nvib::CentralDifference(), "CentralDifference");
+  rejections_leave_no_trace(nvib::CentralDifference(nvib::CentralDifference::Velocity::half_step), "CentralDifference half-step");
+  rejections_leave_no_trace(nvib::CEMDTS(), "CEMDTS");
+  rejections_leave_no_trace(nvib::Zhai(), "Zhai");
+  rejections_leave_no_trace(nvib::Newmark(), "Newmark");
+  rejections_leave_no_trace(nvib::GeneralizedAlpha(), "GeneralizedAlpha");
+}
+
 int main() {
   std::setvbuf(stdout, nullptr, _IONBF, 0);
   // The guard must catch an allocation, or the test proves nothing.
@@ -260,6 +294,7 @@ int main() {
   }
   commits();
   failed_steps();
+  rejections();
   a_million_springs();
   return nvib_test::finish("test_memory");
 }

@@ -17,6 +17,8 @@ struct Stats {
   std::int64_t num_reused_factorizations = 0;
   std::int64_t num_linear_solves = 0;
   std::int64_t num_expm = 0;
+  std::int64_t num_rejected_steps = 0;
+  std::int64_t num_events = 0;
   double wall_time = 0.0;  // seconds
   const char* linear_solver = "";  // of the implicit schemes' Newton iteration: "dense LU", "sparse LDLT", ...
 
@@ -33,6 +35,8 @@ struct Stats {
       "iteration matrices identical to the one factorised last, whose factors were kept");
     v("num_linear_solves", s.num_linear_solves, "solves with a factorised iteration matrix");
     v("num_expm", s.num_expm, "matrix exponentials (PIM)");
+    v("num_rejected_steps", s.num_rejected_steps, "steps retaken (adaptive runs: too inaccurate, failed, or landing on an event)");
+    v("num_events", s.num_events, "steps landed on a declared event (adaptive runs)");
   }
 
   Stats& operator+=(const Stats& o) { return combine(o, 1); }

@@ -76,7 +76,7 @@ class SavedHistory {
       }
     }
   }
-  void shrink(Index rows) {
+  void resize(Index rows) {
     res_.t.conservativeResize(rows);
     res_.u.conservativeResize(rows, m_);
     res_.v.conservativeResize(rows, m_);
@@ -169,7 +169,9 @@ class EnergyAccount {
     res_.energy(row, hysteretic) = hyst_;
     res_.energy(row, balance_error) = ek_ + ep_ + diss_ + hyst_ - work_ - e0_;
   }
-  void shrink(Index rows) { res_.energy.conservativeResize(rows, kEnergyColumns); }
+  void resize(Index rows) { res_.energy.conservativeResize(rows, kEnergyColumns); }
+  // The length of the next step (adaptive runs): the powers are integrated over it.
+  void set_dt(double h) { h_ = h; }
 
  private:
   template <class Stepper>
@@ -242,7 +244,7 @@ class EffectRecorder {
                   r.rate.data() + row * r.count, r.force.data() + row * r.count, r.state.data() + row * r.state.cols());
     }
   }
-  void shrink(Index rows) {
+  void resize(Index rows) {
     for (EffectRecord& r : res_.effects) {
       r.measure.conservativeResize(rows, r.count);
       r.rate.conservativeResize(rows, r.count);

@@ -167,8 +167,18 @@ struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
 
+template <class Stepper, class Observer>
+Result integrate_adaptive(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe);
+
 template <class Stepper, class Observer = NoObserver>
 Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe = Observer{}) {
+  if (!std::isnan(opt.tol)) {
+    if constexpr (has_scheme<Stepper>::value) {
+      return integrate_adaptive(st, t_end, opt, std::forward<Observer>(observe));
+    } else {
+      detail::throw_argument("tol", "adaptive steps need a stepper of the scheme registry");
+    }
+  }
   using clock = std::chrono::steady_clock;
   // The default divergence bound, before the clock starts: it is set-up, not stepping.
   const double load_scale = std::isnan(opt.max_displacement) && std::isfinite(t_end)
@@ -272,9 +282,9 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   // The history up to the last saved state, the counters of this call and the wall time.
   auto finish = [&] {
     if (row < nsave) {
-      history.shrink(row);
-      if (energy) energy->shrink(row);
-      if (recorder) recorder->shrink(row);
+      history.resize(row);
+      if (energy) energy->resize(row);
+      if (recorder) recorder->resize(row);
     }
     res.max_residual = max_residual;
     if (estimate) estimate->finish();
@@ -385,3 +395,5 @@ Result solve(const ModelT& model, const Scheme& scheme, double dt, double t_end,
 }
 
 }  // namespace nvib
+
+#include "adaptive.hpp"

@@ -1,0 +1,492 @@
+// Adaptive steps (SolveOptions::tol): the loop of integrate() with a step length chosen each step so
+// that the run's error estimate stays within tol, and steps that land on the points where a declared
+// force is not smooth. Included at the end of solve.hpp, whose integrate() hands a run with a tol here.
+//
+// The estimate with variable steps. A fixed-step run's estimate (error_estimate.hpp) is
+// c3 h^2 tau |da/dt|: for one mode the phase error c3 h^2 w^3 t times its amplitude. With variable steps
+// the phase error of a mode accumulates as the integral of c3 h(s)^2 w^3 ds, so the estimate becomes the
+// integral over the run of c3 h^2 |da/dt| (and c2 h |a| for a first-order scheme), times pi/2 (the mean of
+// |da/dt| over a cycle is 2/pi of its amplitude), forgetting at the rate of the fixed-step estimate's
+// age (sqrt(2)/lambda, lambda the dissipation rate):
+//     E_i' = (pi/2) (c3 h^2 |da_i/dt| + c2 h |a_i|) - E_i lambda / sqrt(2),   estimate_i = max_t E_i / peak_i.
+// With a constant step and a single mode this is the fixed-step estimate. The precise integration method
+// is exact on the linear modes; its error is the interpolation of the nonlinear remainder, and its local
+// estimate is Milne's: a tenth of the difference between the corrected and the predicted displacement
+// (the ratio of the error constants of a corrector and a predictor through three points), summed with
+// the same forgetting.
+//
+// The control (error per unit step). E_i grows at the rate rho_i = dE_i/dt / scale_i over a step; a
+// run of span T (its duration, or the memory sqrt(2)/lambda when shorter) ends within tol when
+// rho_i T <= tol. A step whose rho T exceeds 2 tol is retaken shorter; the next step is the one that
+// would meet 0.8 tol (rho grows as h^2, as h for a first-order scheme), at most twice and at least a fifth
+// of the last. scale_i is DOF i's peak so far, at least 1e-3 of the largest and a tenth of the
+// displacement the loads may cause (so a run that starts at rest is not held to an error of zero).
+// Explicit schemes are stable only below a step of about 2/w_max, which no accuracy estimate sees
+// before an unstable mode has grown: their longest step is dt (which should be stable), unless
+// max_dt says otherwise; implicit schemes and PIM may grow to 10 dt.
+//
+// Events. A law may declare where its force is not smooth (law::has_event: a Hertz contact opening or
+// closing, a gap closing, a hook's slack taken up, a bilinear law's yield point). A step across which an
+// event value changes sign is retaken, by the Illinois variant of regula falsi on the step length, until
+// it ends past the event by a step within a few units of round-off of the time: the next step starts at
+// the event. A crossing within the first 1e-6 of a step is the round-off of the last landing and is
+// not an event.
+//
+// Rejection restores the stepper exactly (checkpoint() / rollback(): u, v, a, the scheme's history,
+// the laws' committed internal variables): a step retaken at the same length equals the step taken
+// once, which SolveOptions::reject_every tests.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace nvib {
+
+namespace observe {
+
+// The estimate of an adaptive run and the step it asks for (see the top of this file).
+template <class Model>
+class AdaptiveError {
+ public:
+  static constexpr double kPiOver2 = 1.57079632679489661923, kSqrt2 = 1.41421356237309504880;
+  static constexpr std::int64_t kRateEvery = 16;  // accepted steps between samples of the dissipation rate
+
+  AdaptiveError(Model& model, const ErrorConstants& c, double blend, Index n, double span, double floor)
+      : model_(model), c_(c), w_(blend), span_(span), floor_(floor) {
+    b_.setZero(n);
+    peak_.setZero(n);
+    worst_.setZero(n);
+    jerk_.setZero(n);
+    level_.setZero(n);
+  }
+  template <class Stepper>
+  void start(const Stepper& st) {
+    b_ = st.a();
+    peak_ = st.u().cwiseAbs();
+    hyst0_ = model_.hysteretic_dissipation();
+    t0_ = st.time();
+  }
+  // The error rates of the step just taken (length h, state in st, not yet accepted) into rate_i_, and
+  // the worst DOF's rho T / tol: the ratio of the step's error rate to what tol allows.
+  template <class Stepper>
+  double measure(const Stepper& st, double h, double tol) {
+    const Index n = b_.size();
+    const double* a = st.a().data();
+    const double* u = st.u().data();
+    double top = 0.0;
+    for (Index k = 0; k < n; ++k) top = std::max(top, std::max(peak_[k], std::abs(u[k])));
+    const double floor = std::max(1e-3 * top, floor_);
+    double worst = 0.0;
+    for (Index k = 0; k < n; ++k) {
+      const double now = (1.0 - w_) * a[k] + w_ * aprev_[k];
+      jerk_[k] = std::abs(now - b_[k]) / h;
+      level_[k] = std::abs(now);
+      const double rho = c_.c3 * h * h * jerk_[k] + c_.c2 * h * level_[k];
+      const double scale = std::max(std::max(peak_[k], std::abs(u[k])), floor);
+      if (scale > 0.0) worst = std::max(worst, rho / scale);
+    }
+    return worst * horizon() / tol;
+  }
+  // After an accepted step of length h: the age integrals Q2 = int h^2 and Q1 = int h (forgetting), and
+  // the estimate's maxima c3 Q2 |da/dt| + c2 Q1 |a|.
+  template <class Stepper>
+  void accept(const Stepper& st, double h) {
+    ++accepted_;
+    if (accepted_ % kRateEvery == 0) {
+      dissipated_ += h * model_.dissipated_power(st.v());
+      kinetic_ += h * 2.0 * model_.kinetic(st.v());
+      const double elapsed = st.time() - t0_;
+      const double hyst = elapsed > 0.0 ? (model_.hysteretic_dissipation() - hyst0_) / elapsed * kRateEvery * h : 0.0;
+      rate_ = kinetic_ > 0.0 ? std::max(0.0, (dissipated_ + hyst) / kinetic_) : 0.0;
+    }
+    const double keep = rate_ > 0.0 ? std::exp(-h * rate_ / kSqrt2) : 1.0;
+    q2_ = keep * q2_ + h * h * h;
+    q1_ = keep * q1_ + h * h;
+    const Index n = b_.size();
+    const double* a = st.a().data();
+    for (Index k = 0; k < n; ++k) {
+      worst_[k] = std::max(worst_[k], c_.c3 * q2_ * jerk_[k] + c_.c2 * q1_ * level_[k]);
+      peak_[k] = std::max(peak_[k], std::abs(st.u()[k]));
+      b_[k] = (1.0 - w_) * a[k] + w_ * aprev_[k];
+    }
+    if (w_ != 0.0) aprev_ = st.a();
+  }
+  // Before the first step: generalized-alpha's blend needs a_n.
+  template <class Stepper>
+  void prime(const Stepper& st) {
+    aprev_ = st.a();
+  }
+  // Per DOF, relative to its peak (floored at 1e-3 of the largest, as the fixed-step estimate).
+  Vector estimate() const {
+    const Index n = peak_.size();
+    Vector out(n);
+    const double floor = n > 0 ? 1e-3 * peak_.maxCoeff() : 0.0;
+    for (Index k = 0; k < n; ++k) {
+      const double scale = std::max(peak_[k], floor);
+      out[k] = scale > 0.0 ? worst_[k] / scale : (worst_[k] > 0.0 ? std::numeric_limits<double>::infinity() : 0.0);
+    }
+    return out;
+  }
+  // The order of the error rate in h: 2 (c3), 1 where a first-order scheme's c2 term leads, 3 for PIM's
+  // local error through three points (O(h^4) a step).
+  static double order(const ErrorConstants& c) { return c.c2 > 0.0 ? 1.0 : 2.0; }
+
+ private:
+  double horizon() const { return rate_ > 0.0 ? std::min(span_, kSqrt2 / rate_) : span_; }
+
+  Model& model_;
+  ErrorConstants c_;
+  double w_, span_, floor_;
+  Vector b_, aprev_, peak_, worst_, jerk_, level_;
+  double q2_ = 0.0, q1_ = 0.0, rate_ = 0.0, dissipated_ = 0.0, kinetic_ = 0.0, hyst0_ = 0.0, t0_ = 0.0;
+  std::int64_t accepted_ = 0;
+};
+
+}  // namespace observe
+
+template <class Stepper, class Observer>
+Result integrate_adaptive(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe) {
+  using clock = std::chrono::steady_clock;
+  using Model = std::decay_t<decltype(st.model())>;
+  const double t_start = st.time();
+  const double load_scale = std::isfinite(t_end) ? load_displacement_scale(st.model(), t_start, t_end) : 0.0;
+  const auto start = clock::now();
+  const Index n = st.size();
+  steps_to_reach(t_start, t_end, st.dt());  // the checks of t_end and dt
+  NVIB_CHECK(opt.tol > 0.0 && opt.tol < 1.0, "tol", "must lie in (0, 1) (an error relative to each DOF's peak), got " +
+                                                         detail::fmt(opt.tol));
+  NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
+  NVIB_CHECK(opt.observe_period > 0.0, "observe_period", "must be > 0");
+  NVIB_CHECK(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0, "max_displacement",
+             "must be > 0 (infinity for no bound, NaN for the default)");
+  NVIB_CHECK(std::isnan(opt.collapse_deformation) || opt.collapse_deformation > 0.0, "collapse_deformation",
+             "must be > 0 (NaN for none)");
+  NVIB_CHECK(opt.reject_every >= 0, "reject_every", "must be >= 0, got " + std::to_string(opt.reject_every));
+  for (Index d : opt.dofs)
+    NVIB_CHECK(d >= 0 && d < n, "dofs", "index " + std::to_string(d) + " is out of range for " + std::to_string(n) +
+                                            " degrees of freedom");
+  const double dt0 = st.dt();
+  const bool is_explicit = std::decay_t<decltype(st.scheme())>::is_explicit;
+  const double max_dt = std::isnan(opt.max_dt) ? (is_explicit ? dt0 : 10.0 * dt0) : opt.max_dt;
+  const double min_dt = std::isnan(opt.min_dt) ? 1e-6 * dt0 : opt.min_dt;
+  NVIB_CHECK(max_dt > 0.0 && std::isfinite(max_dt), "max_dt", "must be > 0 and finite, got " + detail::fmt(max_dt));
+  NVIB_CHECK(min_dt > 0.0 && min_dt <= max_dt, "min_dt",
+             "must be > 0 and <= max_dt (" + detail::fmt(max_dt) + "), got " + detail::fmt(min_dt));
+  auto& model = st.model();
+  const effects::EffectSet* set = effect_set_of(model.nonlinear_force());
+  NVIB_CHECK(opt.record.empty() || set != nullptr, "record", "the model has no declared effects to record");
+  const double energy_limit = std::isnan(opt.max_energy_error)
+                                  ? (opt.energy ? kDefaultMaxEnergyError : std::numeric_limits<double>::infinity())
+                                  : opt.max_energy_error;
+  NVIB_CHECK(energy_limit > 0.0, "max_energy_error", "must be > 0 (infinity for no check)");
+  NVIB_CHECK(energy_limit == std::numeric_limits<double>::infinity() || opt.energy, "max_energy_error",
+             "needs the energy accounting (energy = true)");
+  NVIB_CHECK(!opt.energy || model.accounts_energy(), "energy",
+             "the model has a force whose energy is unknown (a user callable); energy accounting needs built-in effects");
+  NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
+             "applies to effects with memory, and this model has none");
+
+  // The estimator: the scheme's error constants, or the stepper's own local error (PIM).
+  const ErrorConstants constants = cached_error_constants(st.scheme());
+  NVIB_CHECK(constants.available, "tol",
+             "the scheme has no error estimate to control its step with (PreciseIntegration is exact on linear "
+             "modes; its corrector's local estimate under-states its error on nonlinear ones and is not used)");
+
+  // The history grows as the run goes: its length is not known in advance.
+  std::int64_t capacity = std::max<std::int64_t>(16, std::min<std::int64_t>(steps_to_reach(t_start, t_end, dt0) /
+                                                                               opt.save_every + 2, 1 << 20));
+  Result res;
+  res.num_steps_requested = 0;
+  observe::SavedHistory history(res, opt, n, capacity);
+  std::optional<observe::EnergyAccount<Model>> energy;
+  if (opt.energy) energy.emplace(res, model, capacity, energy_limit, dt0, opt.peaks);
+  std::optional<observe::EffectRecorder> recorder;
+  if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, capacity);
+  std::optional<observe::CollapseWatch> collapse;
+  if (set != nullptr && opt.stop_at_collapse) {
+    collapse.emplace(*set, opt.collapse_deformation);
+    if (!collapse->active()) collapse.reset();
+  }
+  std::optional<observe::PeakTracker> peaks;
+  if (opt.peaks) peaks.emplace(res, opt, n);
+  const double memory_limit = std::isnan(opt.max_history_bytes) ? 0.5 * available_memory_bytes() : opt.max_history_bytes;
+  const Index m = opt.dofs.empty() ? n : static_cast<Index>(opt.dofs.size());
+  const double row_bytes = history_bytes(1, m, opt.energy) +
+                           (opt.record.empty() ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record));
+
+  double floor0 = 0.1 * load_scale;
+  if (n > 0) floor0 = std::max(floor0, 0.1 * st.u().cwiseAbs().maxCoeff());
+  observe::AdaptiveError<Model> estimate(model, constants, error_blend(st.scheme()), n, t_end - t_start, floor0);
+  const double order = observe::AdaptiveError<Model>::order(constants);
+
+  Index row = 0;
+  auto save = [&] {
+    if (row == capacity) {
+      const std::int64_t more = 2 * capacity;
+      NVIB_CHECK(memory_limit <= 0.0 || static_cast<double>(more) * row_bytes <= memory_limit, "save_every, dofs",
+                 "the saved history would need " + detail::fmt(static_cast<double>(more) * row_bytes / 1e9) +
+                     " GB, more than the limit of " + detail::fmt(memory_limit / 1e9) +
+                     " GB; save fewer states (a larger save_every) or fewer DOFs (dofs)");
+      capacity = more;
+      history.resize(capacity);
+      if (energy) energy->resize(capacity);
+      if (recorder) recorder->resize(capacity);
+    }
+    history.save(st, row);
+    if (energy) energy->save(st, row);
+    if (recorder) recorder->save(st, row);
+    ++row;
+  };
+  if (energy) energy->start(st);
+  save();
+  if (peaks) peaks->update(st);
+  estimate.start(st);
+  estimate.prime(st);
+
+  // Events: the declared non-smooth points, their values at the step's start (from the committed
+  // states there) and at a trial's end (from the same committed states).
+  const Index nev = set != nullptr ? set->num_events() : 0;
+  std::vector<double> committed0, g0(static_cast<size_t>(nev)), g1(static_cast<size_t>(nev));
+  if (nev > 0) committed0.resize(static_cast<size_t>(set->state_size()));
+  auto event_values = [&](std::vector<double>& g) {
+    set->events(st.u().data(), st.v().data(), st.time(), committed0.data(), g.data());
+  };
+  // The earliest crossing of the trial just taken: its index and the fraction of the step at which the
+  // values, linear in between, cross (2 if none).
+  auto earliest_crossing = [&](Index& which) {
+    double first = 2.0;
+    which = -1;
+    for (Index j = 0; j < nev; ++j) {
+      const double a = g0[static_cast<size_t>(j)], b = g1[static_cast<size_t>(j)];
+      if ((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)) {
+        const double theta = a / (a - b);
+        if (theta > 1e-6 && theta < first) {
+          first = theta;
+          which = j;
+        }
+      }
+    }
+    return first;
+  };
+
+  const Stats before = st.stats();
+  const double bound = std::isnan(opt.max_displacement)
+                           ? default_max_displacement(st.u(), st.v(), t_end - t_start, load_scale)
+                           : opt.max_displacement;
+  const std::string why =
+      std::isnan(opt.max_displacement)
+          ? " (the default: 1e10 x the run's displacement scale, the largest of 1, max|u0|, max|v0| x its duration "
+            "and the static displacement of its loads)"
+          : std::string();
+  double max_residual = std::numeric_limits<double>::quiet_NaN();
+  ClockPoll poll(opt.observe_period);
+  std::int64_t done = 0, rejected = 0, landed = 0;
+  auto progress = [&] {
+    const double span = t_end - t_start;
+    return static_cast<std::int64_t>(std::floor(1000.0 * std::min(1.0, (st.time() - t_start) / span)));
+  };
+  auto finish = [&] {
+    history.resize(row);
+    if (energy) energy->resize(row);
+    if (recorder) recorder->resize(row);
+    res.max_residual = max_residual;
+    if (opt.error_estimate) res.error_estimate = estimate.estimate();
+    res.num_steps_requested = done;
+    res.stats = st.stats();
+    res.stats -= before;
+    res.stats.num_steps = done;  // accepted: the stepper counts every step it took, the retaken ones too
+    res.stats.num_rejected_steps = rejected;
+    res.stats.num_events = landed;
+    res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
+  };
+  auto fail = [&](Status s, const std::string& message) {
+    res.status = s;
+    res.failure = Failure{};
+    res.failure.status = s;
+    res.failure.step = done + 1;
+    res.failure.t = st.time();
+    res.failure.message = message;
+  };
+  // One trial from the checkpoint: a step of length h, checked for failure and divergence.
+  auto trial = [&](double h, Status& s) {
+    st.rollback();
+    st.set_dt(h);
+    s = st.step();
+    if (s == Status::success && (!displacement_ok(st.u(), bound) || !rates_ok(st.v(), st.a()))) {
+      res.failure = divergence(st, done + 1, bound, why);
+      s = Status::diverged;
+    } else if (s != Status::success) {
+      res.failure = st.failure();
+    }
+  };
+
+  double h = std::min(dt0, max_dt);
+  const double tiny_time = 4.0 * std::numeric_limits<double>::epsilon();
+  try {
+    while (st.time() < t_end) {
+      const double t = st.time();
+      // The last steps: end on t_end, without a sliver of a step before it.
+      const double remaining = t_end - t;
+      if (remaining <= tiny_time * std::max(1.0, std::abs(t_end))) break;
+      double step_h = h;
+      if (step_h >= remaining) step_h = remaining;
+      else if (step_h > 0.5 * remaining) step_h = 0.5 * remaining;
+      st.checkpoint();
+      if (nev > 0) {
+        set->get_state(committed0.data());
+        event_values(g0);
+      }
+      if (opt.reject_every > 0 && (done + 1) % opt.reject_every == 0) {  // a detour that must leave no trace
+        Status s;
+        trial(std::min(2.0 * step_h, remaining), s);
+        ++rejected;
+      }
+      Status s = Status::success;
+      double ratio = 0.0;
+      for (;;) {
+        trial(step_h, s);
+        if (s == Status::success) {
+          ratio = estimate.measure(st, step_h, opt.tol);
+          if (!(ratio <= 2.0) && step_h > min_dt) {  // too inaccurate (or NaN): shorter
+            ++rejected;
+            const double shrink = std::isfinite(ratio) ? std::pow(0.8 / ratio, 1.0 / order) : 0.2;
+            step_h = std::max(min_dt, step_h * std::max(0.2, shrink));
+            continue;
+          }
+          if (!(ratio <= 2.0)) {
+            fail(Status::diverged,
+                 "the step fell to min_dt = " + detail::fmt(min_dt) + " at t = " + detail::fmt(t) +
+                     " and the error estimate still exceeds tol = " + detail::fmt(opt.tol) + " (" +
+                     detail::fmt(ratio) + " x what tol allows there): loosen tol or lower min_dt");
+            s = Status::diverged;
+          }
+          break;
+        }
+        if (s == Status::diverged && res.failure.dof >= 0 && std::isfinite(st.u()[res.failure.dof])) break;  // beyond the bound
+        if (step_h <= min_dt) {
+          res.failure.message += " (at the smallest step min_dt = " + detail::fmt(min_dt) + ")";
+          break;
+        }
+        ++rejected;  // a failed Newton iteration or a non-finite state: shorter
+        step_h = std::max(min_dt, 0.25 * step_h);
+      }
+      const double control_h = step_h;  // the step the error control chose (a landing may shorten it)
+      if (s == Status::success && nev > 0) {
+        // Land on the earliest event inside the step: the end past it by round-off.
+        event_values(g1);
+        Index which = -1;
+        earliest_crossing(which);
+        if (which >= 0) {
+          const size_t j = static_cast<size_t>(which);
+          double lo = 0.0, hi = step_h, glo = g0[j], ghi = g1[j];
+          int side = 0;
+          bool at_hi = true;
+          for (int it = 0; it < 200 && hi - lo > tiny_time * (std::abs(t) + hi); ++it) {
+            double x = lo + (hi - lo) * (glo / (glo - ghi));
+            if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+            trial(x, s);
+            if (s != Status::success) break;
+            event_values(g1);
+            ++rejected;
+            Index other = -1;
+            earliest_crossing(other);
+            if (other >= 0 && other != which) {  // another event comes first: land on that one instead
+              hi = x;
+              ghi = g1[static_cast<size_t>(other)];
+              which = other;
+              glo = g0[static_cast<size_t>(other)];
+              at_hi = true;
+              side = 0;
+              continue;
+            }
+            const double gx = g1[static_cast<size_t>(which)];
+            if (gx == 0.0 || (gx > 0.0) != (g0[static_cast<size_t>(which)] > 0.0)) {  // past it (or on it)
+              hi = x;
+              ghi = gx;
+              at_hi = true;
+              if (gx == 0.0) break;
+              if (side == +1) glo *= 0.5;  // Illinois: the end that stays is halved
+              side = +1;
+            } else {
+              lo = x;
+              glo = gx;
+              at_hi = false;
+              if (side == -1) ghi *= 0.5;
+              side = -1;
+            }
+          }
+          if (s == Status::success && !at_hi) {
+            trial(hi, s);
+            ++rejected;
+          }
+          if (s == Status::success) {
+            step_h = hi;
+            ++landed;
+            estimate.measure(st, step_h, opt.tol);  // the error of the step taken
+          }
+        }
+      }
+      if (s == Status::success) {
+        if constexpr (has_accepted_residual<Stepper>::value) {
+          const double r = st.accepted_residual();
+          if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
+        }
+        if (energy) energy->set_dt(step_h);
+        if ((energy && !energy->step(st, done + 1, res.failure)) || (collapse && !collapse->step(st, done + 1, res.failure)))
+          s = res.failure.status;
+      }
+      if (s != Status::success) {
+        res.status = s;
+        if (s == Status::collapsed) {
+          save();
+          if (peaks) peaks->update(st);
+        }
+        break;
+      }
+      ++done;
+      estimate.accept(st, step_h);
+      if (peaks) peaks->update(st);
+      if (done % opt.save_every == 0 || !(st.time() < t_end)) save();
+      // The next step: the one that meets 0.8 tol, within [0.2, 2] of this one and [min_dt, max_dt].
+      const double grow = ratio > 0.0 ? std::pow(0.8 / ratio, 1.0 / order) : 2.0;
+      h = std::min(max_dt, std::max(min_dt, control_h * std::min(2.0, std::max(0.2, grow))));
+      // A new length costs an implicit scheme a factorisation, and a two-level explicit one a rescaled
+      // history (whose extrapolation error adds up over many small changes): lengthen by 25 % or more.
+      if (h > control_h && h < 1.25 * control_h) h = control_h;
+      if (poll.tick()) {
+        observe(progress(), 1000);
+        poll_interrupt();
+      }
+    }
+    // The history ends with the last accepted state.
+    if (res.status == Status::success && (row == 0 || res.t[row - 1] != st.time())) save();
+  }
+#if defined(__GLIBCXX__)
+  catch (abi::__forced_unwind&) {
+    throw;
+  }
+#endif
+  catch (...) {
+    if (!opt.keep_partial) throw;
+    finish();
+    res.status = Status::interrupted;
+    res.failure = Failure{};
+    res.failure.status = Status::interrupted;
+    res.failure.step = done + 1;
+    res.failure.t = row > 0 ? res.t[row - 1] : st.time();
+    res.failure.message = "interrupted after step " + std::to_string(done) + " at t = " + detail::fmt(st.time()) +
+                          "; the history is saved up to t = " +
+                          (row > 0 ? detail::fmt(res.t[row - 1]) : std::string("the start"));
+    throw PartialRun{std::move(res), std::current_exception()};
+  }
+  observe(progress(), 1000);
+  finish();
+  if (res.status != Status::success && res.status != Status::collapsed && opt.throw_on_failure) throw_failure(res.failure);
+  return res;
+}
+
+}  // namespace nvib
