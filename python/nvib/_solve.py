@@ -70,9 +70,11 @@ in ``Result.warnings`` naming the DOF and the step that would meet it."""
 
 
 class _Warn(typing.NamedTuple):
-    """The levels at which a run's result warns: energy balance error, estimated error."""
+    """The levels at which a run's result warns: energy balance error, estimated error; and the run's
+    tol (NaN at a fixed step), which the warning of an inaccurate adaptive run names instead of a step."""
     energy: float
     error: float
+    tol: float = math.nan
 
 
 class ErrorEstimate:
@@ -88,11 +90,12 @@ class ErrorEstimate:
     (its damping, viscous and hysteretic, forgets): see ``cpp/include/nvib/solve/error_estimate.hpp``.
     Measured against closed forms and DOP853 in ``benchmarks/results/error_estimate.md``."""
 
-    def __init__(self, per_dof: np.ndarray, names: list[str], dt: float, order: int):
+    def __init__(self, per_dof: np.ndarray, names: list[str], dt: float, order: int, tol: float = math.nan):
         self.per_dof = np.asarray(per_dof, dtype=float)
         self.names = names  # indexable (a model's generated names are made on demand)
         self.dt = float(dt)
         self.order = int(order)
+        self.tol = float(tol)
         seen = ~np.isnan(self.per_dof)
         if np.any(seen):
             k = int(np.argmax(np.where(seen, self.per_dof, -np.inf)))
@@ -117,6 +120,8 @@ class ErrorEstimate:
     def __repr__(self) -> str:
         if not self.available:
             return "ErrorEstimate(not available for this scheme)"
+        if not math.isnan(self.tol):
+            return f"ErrorEstimate(max {self.max:.3g} at {self.dof}, adaptive, tol {self.tol:g})"
         return f"ErrorEstimate(max {self.max:.3g} at {self.dof}, dt {self.dt:g} s, order {self.order})"
 
 
@@ -130,7 +135,7 @@ def error_estimate(self) -> ErrorEstimate | None:
     names = extras.get("all_dofs")
     if names is None:
         names = [f"dof{k}" for k in range(len(per_dof))]
-    return ErrorEstimate(per_dof, names, self.dt, extras.get("order", 2))
+    return ErrorEstimate(per_dof, names, self.dt, extras.get("order", 2), extras.get("tol", math.nan))
 
 
 def _error_note(res: Result, limit: float) -> str | None:
@@ -138,6 +143,9 @@ def _error_note(res: Result, limit: float) -> str | None:
     est = error_estimate(res)
     if res.status != Status.success or est is None or not est.available or not est.max > limit:
         return None
+    if not math.isnan(est.tol):
+        return (f"the estimated error reached {est.max:.2g} of the peak of {est.dof} (above warn_error = {limit:g}) "
+                f"in a run with tol = {est.tol:g}: a smaller tol (or max_dt) would meet it")
     return (f"the estimated error reached {est.max:.2g} of the peak of {est.dof} (above warn_error = {limit:g}): "
             f"a step of about {est.dt_for(limit):.3g} s would meet it (the run's is {est.dt:g} s); "
             f"nvib.cost measures the true error against a reference")
@@ -185,7 +193,7 @@ def _annotate(res: Result, model: Model, warn: _Warn, note: str | None = None) -
     ground = _ground_of(model, idx)
     order = getattr(res.scheme, "order_u", 2)
     res._extras = {"ground": ground, "relative_to_ground": ground is not None, "units": units, "warnings": warnings,
-                   "all_dofs": model.dofs, "order": order if isinstance(order, int) else 2}
+                   "all_dofs": model.dofs, "order": order if isinstance(order, int) else 2, "tol": warn.tol}
     error_note = _error_note(res, warn.error)
     if error_note:
         warnings.append(error_note)
@@ -310,6 +318,9 @@ RUN_OPTIONS = {
     "stop_at_collapse": _core.RUN_DEFAULTS["stop_at_collapse"],
     "error_estimate": _core.RUN_DEFAULTS["error_estimate"],
     "warn_error": ERROR_WARNING,
+    "tol": None,
+    "max_dt": None,
+    "min_dt": None,
 }
 
 
@@ -339,9 +350,11 @@ def check_settings(given: dict) -> tuple[dict, object, bool, _Warn]:
                 collapse_deformation=math.nan if o["collapse_deformation"] is None else
                 _checks.real("collapse_deformation", o["collapse_deformation"], positive=True),
                 stop_at_collapse=_checks.boolean("stop_at_collapse", o["stop_at_collapse"]),
-                error_estimate=_checks.boolean("error_estimate", o["error_estimate"]))
+                error_estimate=_checks.boolean("error_estimate", o["error_estimate"]),
+                **{k: math.nan if o[k] is None else _checks.real(k, o[k], positive=True)
+                   for k in ("tol", "max_dt", "min_dt")})
     warn = _Warn(_warning_level("warn_energy_error", o["warn_energy_error"]),
-                 _warning_level("warn_error", o["warn_error"]))
+                 _warning_level("warn_error", o["warn_error"]), core["tol"])
     return core, progress, _checks.boolean("throw", o["throw"]), warn
 
 

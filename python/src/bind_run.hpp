@@ -168,6 +168,10 @@ inline SolveOptions solve_options(const py::dict& given) {
     else if (key == "collapse_deformation") opt.collapse_deformation = v.cast<double>();
     else if (key == "stop_at_collapse") opt.stop_at_collapse = v.cast<bool>();
     else if (key == "error_estimate") opt.error_estimate = v.cast<bool>();
+    else if (key == "tol") opt.tol = v.cast<double>();
+    else if (key == "max_dt") opt.max_dt = v.cast<double>();
+    else if (key == "min_dt") opt.min_dt = v.cast<double>();
+    else if (key == "reject_every") opt.reject_every = v.cast<std::int64_t>();
     else if (key == "peaks") {  // internal (solve_many's keep="peaks"): an (m, n) sparse D, or None
       opt.peaks = !v.is_none();
       if (opt.peaks) opt.peak_measures = v.cast<nvib::SparseMatrix>();

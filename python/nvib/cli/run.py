@@ -15,7 +15,7 @@ from .._io import FORMATS
 OUT_FORMATS = FORMATS
 MAX_SAVED = 200_000  # default cap on saved states; --save-every overrides
 STOREY_RECORD_BYTES = 256e6  # the most that recording the storeys for --plot may add to a run's memory
-RUN_FLAGS = {"dt": "--dt", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
+RUN_FLAGS = {"dt": "--dt", "tol": "--tol", "t_end": "--t-end", "save_every": "--save-every", "max_displacement": "--max-displacement",
              "max_energy_error": "--max-energy-error", "without": "--without", "scene": "SCENE", "dofs": "--dof",
              "collapse_deformation": "--collapse-deformation", "record": "--record-effect", "energy": "--energy",
              "ground_motion": "--record"}
@@ -51,6 +51,9 @@ def add_parser(sub) -> None:
     c.add_scheme_options(g)
     g = p.add_argument_group("run")
     g.add_argument("--dt", type=c.positive_real, help="time step [s] (default: the scene's)")
+    g.add_argument("--tol", type=c.positive_real, metavar="TOL",
+                   help="adaptive steps: choose each step so that the estimated error stays within TOL of each "
+                        "DOF's peak; --dt is then the first step (and an explicit scheme's longest)")
     g.add_argument("--t-end", type=c.positive_real, metavar="T", help="end time [s] (default: the scene's)")
     g.add_argument("--save-every", type=c.positive_int, metavar="K",
                    help=f"save every K-th step (default 1, or more to keep at most {MAX_SAVED} states)")
@@ -222,7 +225,8 @@ def run(args) -> int:
     try:
         res = solve(model, scheme, dt=dt, t_end=t_end, save_every=save_every, throw=False,
                     max_displacement=args.max_displacement, progress=bar if show else None, energy=args.energy,
-                    max_energy_error=args.max_energy_error, record=record, collapse_deformation=collapse)
+                    max_energy_error=args.max_energy_error, record=record, collapse_deformation=collapse,
+                    tol=args.tol)
     except KeyboardInterrupt as exc:
         bar.close(done=False)
         res = getattr(exc, "result", None)  # the history saved before the interrupt (none before the loop)
@@ -382,8 +386,10 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
                                       + (" (relative to the ground)" if res.relative_to_ground else "")))
     est = res.error_estimate
     if est is not None:
+        adaptive = f"; adaptive, tol {args.tol:g}: {stats['num_rejected_steps']} steps retaken, " \
+            f"{stats['num_events']} landed on events" if args.tol else ""
         lines.append(("error estimate", f"{est.max:.2g} of the peak of {est.dof} (max |u - u_exact| / max |u|, "
-                                        f"estimated from the steps)" if est.available else
+                                        f"estimated from the steps{adaptive})" if est.available else
                       "not available for this scheme (exact on linear modes; nvib cost measures its error)"))
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
