@@ -38,6 +38,8 @@ class Stats:
     num_reused_factorizations: int
     num_linear_solves: int
     num_expm: int
+    num_rejected_steps: int
+    num_events: int
     wall_time: float
     linear_solver: str
     def as_dict(self) -> dict[str, float]: ...
