@@ -55,20 +55,19 @@ struct CEMDTS {
 };
 
 template <class ModelT>
-class CEMDTSStepper : public StepperBase<ModelT> {
-  using Base = StepperBase<ModelT>;
+class CEMDTSStepper : public TwoLevelStepper<ModelT> {
+  using Base = TwoLevelStepper<ModelT>;
   NVIB_STEPPER_STATE(Base);
+  using Base::aprev_;
 
  public:
   CEMDTSStepper(const CEMDTS& scheme, ModelT model, double h) : Base(std::move(model), h), scheme_(scheme) {
-    aprev_.setZero(this->size());
     anew_.setZero(this->size());
     vstar_.setZero(this->size());
   }
 
   void initialize(double t0, const Vector& u0, const Vector& v0) {
-    this->start(t0, u0, v0);
-    aprev_ = a_;
+    this->start_two_level(t0, u0, v0);
   }
 
   Status step() {
@@ -112,32 +111,11 @@ class CEMDTSStepper : public StepperBase<ModelT> {
     detail::for_each_index(n, [=](Index i) { v[i] += vn * an[i] + va * a[i] - vp * ap[i]; });
   }
 
-  // Variable steps: a_{n-1} enters as the slope (a_n - a_{n-1}) / h; a new step h' keeps that slope by
-  // carrying a_n - (h'/h) (a_n - a_{n-1}), the value a_{n-1} would have had a step of h' before.
-  void set_dt(double h) {
-    if (h == h_) return;
-    const double r = h / h_;
-    aprev_ = a_ - r * (a_ - aprev_);
-    Base::set_dt(h);
-  }
-  void checkpoint() {
-    Base::checkpoint();
-    ck_aprev_ = aprev_;
-  }
-  void rollback() {
-    Base::rollback();
-    aprev_ = ck_aprev_;
-  }
-
-  // State: [u; v; a; a_{n-1}; internal variables of the laws with memory].
-  Index state_size() const { return this->size_with(this->size()); }
-  Vector state() const { return this->state_with(aprev_); }
-  void set_state(double t, const Vector& x) { this->set_state_with(t, x, aprev_); }
+  // State: [u; v; a; a_{n-1}; internal variables of the laws with memory] (TwoLevelStepper).
 
  private:
   CEMDTS scheme_;
-  Vector ck_aprev_;
-  Vector aprev_, anew_, vstar_;
+  Vector anew_, vstar_;
 };
 
 }  // namespace nvib

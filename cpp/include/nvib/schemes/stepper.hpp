@@ -206,4 +206,44 @@ class StepperBase {
   Failure failure_;
 };
 
+// A stepper that also carries a_{n-1} (the two-level explicit schemes: CEMDTS, Zhai). The state is
+// [u; v; a; a_{n-1}; internal variables of the laws with memory]; a_{-1} = a_0.
+template <class ModelT>
+class TwoLevelStepper : public StepperBase<ModelT> {
+  using Base = StepperBase<ModelT>;
+
+ public:
+  TwoLevelStepper(ModelT model, double h) : Base(std::move(model), h) { aprev_.setZero(this->size()); }
+
+  // Variable steps: a_{n-1} enters as the slope (a_n - a_{n-1}) / h; a new step h' keeps that slope by
+  // carrying a_n - (h'/h) (a_n - a_{n-1}), the value a_{n-1} would have had a step of h' before.
+  void set_dt(double h) {
+    if (h == this->h_) return;
+    const double r = h / this->h_;
+    aprev_ = this->a_ - r * (this->a_ - aprev_);
+    Base::set_dt(h);
+  }
+  void checkpoint() {
+    Base::checkpoint();
+    ck_aprev_ = aprev_;
+  }
+  void rollback() {
+    Base::rollback();
+    aprev_ = ck_aprev_;
+  }
+
+  Index state_size() const { return this->size_with(this->size()); }
+  Vector state() const { return this->state_with(aprev_); }
+  void set_state(double t, const Vector& x) { this->set_state_with(t, x, aprev_); }
+
+ protected:
+  // Base::start with a_{-1} = a_0.
+  void start_two_level(double t0, const Vector& u0, const Vector& v0) {
+    this->start(t0, u0, v0);
+    aprev_ = this->a_;
+  }
+
+  Vector aprev_, ck_aprev_;
+};
+
 }  // namespace nvib

@@ -43,18 +43,17 @@ struct Zhai {
 };
 
 template <class ModelT>
-class ZhaiStepper : public StepperBase<ModelT> {
-  using Base = StepperBase<ModelT>;
+class ZhaiStepper : public TwoLevelStepper<ModelT> {
+  using Base = TwoLevelStepper<ModelT>;
   NVIB_STEPPER_STATE(Base);
+  using Base::aprev_;
 
  public:
   ZhaiStepper(const Zhai& scheme, ModelT model, double h) : Base(std::move(model), h), scheme_(scheme) {
-    aprev_.setZero(this->size());
   }
 
   void initialize(double t0, const Vector& u0, const Vector& v0) {
-    this->start(t0, u0, v0);
-    aprev_ = a_;
+    this->start_two_level(t0, u0, v0);
   }
 
   Status step() {
@@ -79,32 +78,10 @@ class ZhaiStepper : public StepperBase<ModelT> {
     });
   }
 
-  // Variable steps: a_{n-1} enters as the slope (a_n - a_{n-1}) / h; a new step h' keeps that slope by
-  // carrying a_n - (h'/h) (a_n - a_{n-1}), the value a_{n-1} would have had a step of h' before.
-  void set_dt(double h) {
-    if (h == h_) return;
-    const double r = h / h_;
-    aprev_ = a_ - r * (a_ - aprev_);
-    Base::set_dt(h);
-  }
-  void checkpoint() {
-    Base::checkpoint();
-    ck_aprev_ = aprev_;
-  }
-  void rollback() {
-    Base::rollback();
-    aprev_ = ck_aprev_;
-  }
-
-  // State: [u; v; a; a_{n-1}; internal variables of the laws with memory].
-  Index state_size() const { return this->size_with(this->size()); }
-  Vector state() const { return this->state_with(aprev_); }
-  void set_state(double t, const Vector& x) { this->set_state_with(t, x, aprev_); }
+  // State: [u; v; a; a_{n-1}; internal variables of the laws with memory] (TwoLevelStepper).
 
  private:
   Zhai scheme_;
-  Vector ck_aprev_;
-  Vector aprev_;
 };
 
 }  // namespace nvib
