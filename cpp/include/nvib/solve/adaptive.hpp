@@ -162,16 +162,7 @@ Result integrate_adaptive(Stepper& st, double t_end, const SolveOptions& opt, Ob
   steps_to_reach(t_start, t_end, st.dt());  // the checks of t_end and dt
   NVIB_CHECK(opt.tol > 0.0 && opt.tol < 1.0, "tol", "must lie in (0, 1) (an error relative to each DOF's peak), got " +
                                                          detail::fmt(opt.tol));
-  NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
-  NVIB_CHECK(opt.observe_period > 0.0, "observe_period", "must be > 0");
-  NVIB_CHECK(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0, "max_displacement",
-             "must be > 0 (infinity for no bound, NaN for the default)");
-  NVIB_CHECK(std::isnan(opt.collapse_deformation) || opt.collapse_deformation > 0.0, "collapse_deformation",
-             "must be > 0 (NaN for none)");
   NVIB_CHECK(opt.reject_every >= 0, "reject_every", "must be >= 0, got " + std::to_string(opt.reject_every));
-  for (Index d : opt.dofs)
-    NVIB_CHECK(d >= 0 && d < n, "dofs", "index " + std::to_string(d) + " is out of range for " + std::to_string(n) +
-                                            " degrees of freedom");
   const double dt0 = st.dt();
   const bool is_explicit = std::decay_t<decltype(st.scheme())>::is_explicit;
   const double max_dt = std::isnan(opt.max_dt) ? (is_explicit ? dt0 : 10.0 * dt0) : opt.max_dt;
@@ -181,19 +172,9 @@ Result integrate_adaptive(Stepper& st, double t_end, const SolveOptions& opt, Ob
              "must be > 0 and <= max_dt (" + detail::fmt(max_dt) + "), got " + detail::fmt(min_dt));
   auto& model = st.model();
   const effects::EffectSet* set = effect_set_of(model.nonlinear_force());
-  NVIB_CHECK(opt.record.empty() || set != nullptr, "record", "the model has no declared effects to record");
-  const double energy_limit = std::isnan(opt.max_energy_error)
-                                  ? (opt.energy ? kDefaultMaxEnergyError : std::numeric_limits<double>::infinity())
-                                  : opt.max_energy_error;
-  NVIB_CHECK(energy_limit > 0.0, "max_energy_error", "must be > 0 (infinity for no check)");
-  NVIB_CHECK(energy_limit == std::numeric_limits<double>::infinity() || opt.energy, "max_energy_error",
-             "needs the energy accounting (energy = true)");
-  NVIB_CHECK(!opt.energy || model.accounts_energy(), "energy",
-             "the model has a force whose energy is unknown (a user callable); energy accounting needs built-in effects");
-  NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
-             "applies to effects with memory, and this model has none");
+  const double energy_limit = detail::checked_run_options(opt, model, n);
 
-  // The estimator: the scheme's error constants, or the stepper's own local error (PIM).
+  // The estimator: the scheme's error constants.
   const ErrorConstants constants = cached_error_constants(st.scheme());
   NVIB_CHECK(constants.available, "tol",
              "the scheme has no error estimate to control its step with (PreciseIntegration is exact on linear "
@@ -277,14 +258,8 @@ Result integrate_adaptive(Stepper& st, double t_end, const SolveOptions& opt, Ob
   };
 
   const Stats before = st.stats();
-  const double bound = std::isnan(opt.max_displacement)
-                           ? default_max_displacement(st.u(), st.v(), t_end - t_start, load_scale)
-                           : opt.max_displacement;
-  const std::string why =
-      std::isnan(opt.max_displacement)
-          ? " (the default: 1e10 x the run's displacement scale, the largest of 1, max|u0|, max|v0| x its duration "
-            "and the static displacement of its loads)"
-          : std::string();
+  std::string why;
+  const double bound = detail::divergence_bound(opt, st, t_end - t_start, load_scale, why);
   double max_residual = std::numeric_limits<double>::quiet_NaN();
   ClockPoll poll(opt.observe_period);
   std::int64_t done = 0, rejected = 0, landed = 0;

@@ -167,6 +167,49 @@ struct NoObserver {
   void operator()(std::int64_t, std::int64_t) const {}
 };
 
+namespace detail {
+// The checks of a run's options that both loops (fixed steps, adaptive.hpp) make, naming the option;
+// returns the energy check's limit (SolveOptions::max_energy_error with its default applied).
+template <class ModelT>
+double checked_run_options(const SolveOptions& opt, const ModelT& model, Index n) {
+  NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
+  NVIB_CHECK(opt.observe_period > 0.0, "observe_period", "must be > 0");
+  NVIB_CHECK(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0, "max_displacement",
+             "must be > 0 (infinity for no bound, NaN for the default)");
+  NVIB_CHECK(std::isnan(opt.collapse_deformation) || opt.collapse_deformation > 0.0, "collapse_deformation",
+             "must be > 0 (NaN for none)");
+  for (Index d : opt.dofs)
+    NVIB_CHECK(d >= 0 && d < n, "dofs", "index " + std::to_string(d) + " is out of range for " + std::to_string(n) +
+                                            " degrees of freedom");
+  const effects::EffectSet* set = effect_set_of(model.nonlinear_force());
+  NVIB_CHECK(opt.record.empty() || set != nullptr, "record", "the model has no declared effects to record");
+  const double energy_limit = std::isnan(opt.max_energy_error)
+                                  ? (opt.energy ? kDefaultMaxEnergyError : std::numeric_limits<double>::infinity())
+                                  : opt.max_energy_error;
+  NVIB_CHECK(energy_limit > 0.0, "max_energy_error", "must be > 0 (infinity for no check)");
+  NVIB_CHECK(energy_limit == std::numeric_limits<double>::infinity() || opt.energy, "max_energy_error",
+             "needs the energy accounting (energy = true)");
+  NVIB_CHECK(!opt.energy || model.accounts_energy(), "energy",
+             "the model has a force whose energy is unknown (a user callable); energy accounting needs built-in effects");
+  NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
+             "applies to effects with memory, and this model has none");
+  return energy_limit;
+}
+
+// The divergence bound on |u_i| of a run of `duration` from the stepper's state (max_displacement, or its
+// default), and in `why` what a divergence message says of it.
+template <class Stepper>
+double divergence_bound(const SolveOptions& opt, const Stepper& st, double duration, double load_scale, std::string& why) {
+  if (!std::isnan(opt.max_displacement)) {
+    why.clear();
+    return opt.max_displacement;
+  }
+  why = " (the default: 1e10 x the run's displacement scale, the largest of 1, max|u0|, max|v0| x its duration "
+        "and the static displacement of its loads)";
+  return default_max_displacement(st.u(), st.v(), duration, load_scale);
+}
+}  // namespace detail
+
 template <class Stepper, class Observer>
 Result integrate_adaptive(Stepper& st, double t_end, const SolveOptions& opt, Observer&& observe);
 
@@ -186,18 +229,9 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
                                 : 0.0;
   const auto start = clock::now();
   const Index n = st.size();
-  NVIB_CHECK(opt.save_every >= 1, "save_every", "must be >= 1, got " + std::to_string(opt.save_every));
-  NVIB_CHECK(opt.observe_period > 0.0, "observe_period", "must be > 0");
-  NVIB_CHECK(std::isnan(opt.max_displacement) || opt.max_displacement > 0.0, "max_displacement",
-             "must be > 0 (infinity for no bound, NaN for the default)");
-  NVIB_CHECK(std::isnan(opt.collapse_deformation) || opt.collapse_deformation > 0.0, "collapse_deformation",
-             "must be > 0 (NaN for none)");
-  for (Index d : opt.dofs)
-    NVIB_CHECK(d >= 0 && d < n, "dofs", "index " + std::to_string(d) + " is out of range for " + std::to_string(n) +
-                                            " degrees of freedom");
   auto& model = st.model();
   const effects::EffectSet* set = effect_set_of(model.nonlinear_force());
-  NVIB_CHECK(opt.record.empty() || set != nullptr, "record", "the model has no declared effects to record");
+  const double energy_limit = detail::checked_run_options(opt, model, n);
   const std::int64_t nsteps = steps_to_reach(st.time(), t_end, st.dt());
   const std::int64_t k = opt.save_every;
   const std::int64_t nsave = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
@@ -216,14 +250,6 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     NVIB_CHECK(static_cast<double>(nsave) * static_cast<double>(std::max<Index>(m, 1)) <= 9.0e15, "save_every",
                "the run would save " + std::to_string(nsave) + " states; raise save_every");
   }
-  const double energy_limit = std::isnan(opt.max_energy_error)
-                                  ? (opt.energy ? kDefaultMaxEnergyError : std::numeric_limits<double>::infinity())
-                                  : opt.max_energy_error;
-  NVIB_CHECK(energy_limit > 0.0, "max_energy_error", "must be > 0 (infinity for no check)");
-  NVIB_CHECK(energy_limit == std::numeric_limits<double>::infinity() || opt.energy, "max_energy_error",
-             "needs the energy accounting (energy = true)");
-  NVIB_CHECK(!opt.energy || model.accounts_energy(), "energy",
-             "the model has a force whose energy is unknown (a user callable); energy accounting needs built-in effects");
 
   Result res;
   res.num_steps_requested = nsteps;
@@ -234,8 +260,6 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   if (opt.energy) energy.emplace(res, model, nsave, energy_limit, st.dt(), opt.peaks);
   std::optional<observe::EffectRecorder> recorder;
   if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, nsave);
-  NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
-             "applies to effects with memory, and this model has none");
   std::optional<observe::CollapseWatch> collapse;
   if (set != nullptr && opt.stop_at_collapse) {
     collapse.emplace(*set, opt.collapse_deformation);
@@ -267,14 +291,8 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   if (estimate) estimate->start(st);
 
   const Stats before = st.stats();
-  const double bound = std::isnan(opt.max_displacement)
-                           ? default_max_displacement(st.u(), st.v(), t_end - st.time(), load_scale)
-                           : opt.max_displacement;
-  const std::string why =
-      std::isnan(opt.max_displacement)
-          ? " (the default: 1e10 x the run's displacement scale, the largest of 1, max|u0|, max|v0| x its duration "
-            "and the static displacement of its loads)"
-          : std::string();
+  std::string why;
+  const double bound = detail::divergence_bound(opt, st, t_end - st.time(), load_scale, why);
   double max_residual = std::numeric_limits<double>::quiet_NaN();
   // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
   std::int64_t to_save = k, done = 0;
