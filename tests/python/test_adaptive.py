@@ -12,13 +12,7 @@ import pytest
 import nvib
 from nvib.analysis.reference import reference
 
-
-def _true_error(res, ref) -> float:
-    keep = res.t <= ref.t_end * (1 + 1e-12)
-    u_ref = ref.u(res.t[keep])
-    peak = np.max(np.abs(u_ref), axis=0)
-    peak = np.maximum(peak, 1e-3 * peak.max())
-    return float(np.max(np.max(np.abs(res.u[keep] - u_ref), axis=0) / peak))
+from _accuracy import true_error as _true_error
 
 
 # (scene, scheme, tol): the true error within 3 tol. Measured true / tol: building Newmark 1.74 (tol 1e-3)

@@ -16,16 +16,10 @@ import pytest
 import nvib
 from nvib.analysis.reference import reference
 
+from _accuracy import true_error as _true_error
+
 SECOND_ORDER = [nvib.CentralDifference(), nvib.CEMDTS(), nvib.Zhai(), nvib.Newmark(), nvib.GeneralizedAlpha(),
                 nvib.GeneralizedAlpha.from_rho_inf(0.8)]
-
-
-def _true_error(res, ref) -> float:
-    keep = res.t <= ref.t_end * (1 + 1e-12)
-    u_ref = ref.u(res.t[keep])
-    peak = np.max(np.abs(u_ref), axis=0)
-    peak = np.maximum(peak, 1e-3 * peak.max())
-    return float(np.max(np.max(np.abs(res.u[keep] - u_ref), axis=0) / peak))
 
 
 @pytest.mark.parametrize("scheme", SECOND_ORDER + [nvib.Newmark(beta=0.3025, gamma=0.6)], ids=lambda s: s.label)
