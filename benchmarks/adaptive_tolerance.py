@@ -39,8 +39,9 @@ def main() -> None:
     lines = ["# Adaptive runs against their tolerance", "",
              f"nvib {nvib.__version__}, revision {git_revision()}, {cpu_name()}, "
              f"load average {os.getloadavg()[0]:.2f}, {time.strftime('%Y-%m-%d')}", "",
-             "| scene | scheme | tol | true error | true / tol | estimate | accepted | retaken | events |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| scene | scheme | tol | true error | true / tol | estimate | estimate / true | steps | companion steps "
+             "| retaken | events | restarts | time (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     print("\n".join(lines))
     for scene in SCENES:
         model = nvib.load_scene(scene)
@@ -52,7 +53,9 @@ def main() -> None:
                 err = true_error(res, ref)
                 s = res.stats
                 row = (f"| {scene} | {scheme.label} | {tol:g} | {err:.3g} | {err / tol:.3g} | "
-                       f"{res.error_estimate.max:.3g} | {s.num_steps} | {s.num_rejected_steps} | {s.num_events} |")
+                       f"{res.error_estimate.max:.3g} | {res.error_estimate.max / err:.2g} | {s.num_steps} | "
+                       f"{s.num_check_steps} | {s.num_rejected_steps} | {s.num_events} | {s.num_restarts} | "
+                       f"{s.wall_time:.3g} |")
                 lines.append(row)
                 print(row, flush=True)
     if args.out:

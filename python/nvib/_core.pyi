@@ -40,6 +40,8 @@ class Stats:
     num_expm: int
     num_rejected_steps: int
     num_events: int
+    num_check_steps: int
+    num_restarts: int
     wall_time: float
     linear_solver: str
     def as_dict(self) -> dict[str, float]: ...

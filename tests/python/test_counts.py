@@ -199,7 +199,7 @@ def test_stats_as_dict():
     d = s.as_dict()
     assert set(d) == {"num_steps", "num_force_evals", "num_fd_force_evals", "num_tangent_evals", "num_newton_iters",
                       "num_factorizations", "num_reused_factorizations", "num_linear_solves", "num_expm", "num_rejected_steps",
-                      "num_events", "wall_time",
+                      "num_events", "num_check_steps", "num_restarts", "wall_time",
                       "linear_solver"}
     for k, v in d.items():
         assert v == getattr(s, k)

@@ -19,6 +19,8 @@ struct Stats {
   std::int64_t num_expm = 0;
   std::int64_t num_rejected_steps = 0;
   std::int64_t num_events = 0;
+  std::int64_t num_check_steps = 0;
+  std::int64_t num_restarts = 0;
   double wall_time = 0.0;  // seconds
   const char* linear_solver = "";  // of the implicit schemes' Newton iteration: "dense LU", "sparse LDLT", ...
 
@@ -37,6 +39,8 @@ struct Stats {
     v("num_expm", s.num_expm, "matrix exponentials (PIM)");
     v("num_rejected_steps", s.num_rejected_steps, "steps retaken (adaptive runs: too inaccurate, failed, or landing on an event)");
     v("num_events", s.num_events, "steps landed on a declared event (adaptive runs)");
+    v("num_check_steps", s.num_check_steps, "steps of the companion run on double steps that measures an adaptive run's error");
+    v("num_restarts", s.num_restarts, "adaptive runs redone from the start with a tighter control (their error exceeded tol)");
   }
 
   Stats& operator+=(const Stats& o) { return combine(o, 1); }

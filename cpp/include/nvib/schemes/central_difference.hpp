@@ -11,6 +11,8 @@
 // order with damping. Both variants give the same displacements.
 #pragma once
 
+#include <array>
+
 #include <string>
 
 #include "scheme.hpp"
@@ -119,13 +121,13 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
     if (scheme_.velocity == CentralDifference::Velocity::half_step && !first_) v_ += (0.5 * (h_ - h)) * a_;
     Base::set_dt(h);
   }
-  void checkpoint() {
-    Base::checkpoint();
-    ck_first_ = first_;
+  void checkpoint(int slot = 0) {
+    Base::checkpoint(slot);
+    ck_first_[static_cast<size_t>(slot)] = first_;
   }
-  void rollback() {
-    Base::rollback();
-    first_ = ck_first_;
+  void rollback(int slot = 0) {
+    Base::rollback(slot);
+    first_ = ck_first_[static_cast<size_t>(slot)];
   }
 
   // State: [u; v; a]; with velocity = half_step, v is the carried v_{n-1/2}
@@ -138,7 +140,8 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
  private:
   CentralDifference scheme_;
   Vector anew_, vstar_;
-  bool first_ = true, ck_first_ = true;
+  bool first_ = true;
+  std::array<bool, Base::kCheckpoints> ck_first_{true, true, true, true};
 };
 
 }  // namespace nvib

@@ -175,9 +175,9 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     Base::set_dt(h);
     newton_.reset();
   }
-  void rollback() {
+  void rollback(int slot = 0) {
     const double h = h_;
-    Base::rollback();
+    Base::rollback(slot);
     if (h_ != h) newton_.reset();
   }
 

@@ -22,6 +22,8 @@
 // history value r_{n+1} is evaluated at the corrected state (P(EC)^k E).
 #pragma once
 
+#include <array>
+
 #include <algorithm>
 #include <string>
 
@@ -218,16 +220,16 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     Base::set_dt(h);
     use_propagators();
   }
-  void checkpoint() {
-    Base::checkpoint();
-    ck_R_ = R_;
-    ck_nhist_ = nhist_;
+  void checkpoint(int slot = 0) {
+    Base::checkpoint(slot);
+    ck_R_[static_cast<size_t>(slot)] = R_;
+    ck_nhist_[static_cast<size_t>(slot)] = nhist_;
   }
-  void rollback() {
+  void rollback(int slot = 0) {
     const double h = h_;
-    Base::rollback();
-    R_ = ck_R_;
-    nhist_ = ck_nhist_;
+    Base::rollback(slot);
+    R_ = ck_R_[static_cast<size_t>(slot)];
+    nhist_ = ck_nhist_[static_cast<size_t>(slot)];
     x_.head(this->size()) = u_;
     x_.tail(this->size()) = v_;
     if (h_ != h) use_propagators();
@@ -336,8 +338,10 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   std::vector<Propagators> cache_;
   std::size_t active_ = 0;
   Vector x_, z_, rnew_;
-  Matrix R_, ck_R_;
-  Index nhist_ = 0, ck_nhist_ = 0;
+  Matrix R_;
+  std::array<Matrix, Base::kCheckpoints> ck_R_;
+  Index nhist_ = 0;
+  std::array<Index, Base::kCheckpoints> ck_nhist_{};
 };
 
 }  // namespace nvib

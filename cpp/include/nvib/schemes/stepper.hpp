@@ -6,6 +6,8 @@
 // reaches it, so it leaves every internal variable as it was.
 #pragma once
 
+#include <array>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -52,7 +54,9 @@ class StepperBase {
   // current time on; a stepper that carries a history at its step (a_{n-1}, PIM's remainders) hides it
   // with its own, which rescales that history first. checkpoint() keeps the state at an accepted step,
   // rollback() restores it exactly, step length included (the laws' committed internal variables too):
-  // a step that is then retaken equals one taken without the detour.
+  // a step that is then retaken equals one taken without the detour. There are kCheckpoints slots: an
+  // adaptive run keeps its companion's step start, its answer's state and step start, and the run's start.
+  static constexpr int kCheckpoints = 4;
   void set_dt(double h) {
     if (h == h_) return;
     check_time_step(h);
@@ -60,26 +64,28 @@ class StepperBase {
     nt_ = 0;
     h_ = h;
   }
-  void checkpoint() {
-    ck_.u = u_;
-    ck_.v = v_;
-    ck_.a = a_;
-    ck_.t0 = t0_;
-    ck_.h = h_;
-    ck_.n = n_;
-    ck_.nt = nt_;
-    ck_.laws.resize(model_.state_size());
-    model_.get_state(ck_.laws.data());
+  void checkpoint(int slot = 0) {
+    Checkpoint& ck = ck_[checked_slot(slot)];
+    ck.u = u_;
+    ck.v = v_;
+    ck.a = a_;
+    ck.t0 = t0_;
+    ck.h = h_;
+    ck.n = n_;
+    ck.nt = nt_;
+    ck.laws.resize(model_.state_size());
+    model_.get_state(ck.laws.data());
   }
-  void rollback() {
-    u_ = ck_.u;
-    v_ = ck_.v;
-    a_ = ck_.a;
-    t0_ = ck_.t0;
-    h_ = ck_.h;
-    n_ = ck_.n;
-    nt_ = ck_.nt;
-    model_.set_state(ck_.laws.data());
+  void rollback(int slot = 0) {
+    const Checkpoint& ck = ck_[checked_slot(slot)];
+    u_ = ck.u;
+    v_ = ck.v;
+    a_ = ck.a;
+    t0_ = ck.t0;
+    h_ = ck.h;
+    n_ = ck.n;
+    nt_ = ck.nt;
+    model_.set_state(ck.laws.data());
     failure_ = Failure{};
   }
 
@@ -102,6 +108,11 @@ class StepperBase {
   }
 
  protected:
+  static size_t checked_slot(int slot) {
+    NVIB_CHECK(slot >= 0 && slot < kCheckpoints, "slot", "must lie in [0, " + std::to_string(kCheckpoints) + "), got " +
+                                                         std::to_string(slot));
+    return static_cast<size_t>(slot);
+  }
   void pack_base(Vector& x) const {
     const Index n = size();
     x.segment(0, n) = u_;
@@ -200,7 +211,8 @@ class StepperBase {
     std::vector<double> laws;
     double t0 = 0.0, h = 0.0;
     std::int64_t n = 0, nt = 0;
-  } ck_;
+  };
+  std::array<Checkpoint, kCheckpoints> ck_;
   Vector u_, v_, a_;
   Stats stats_;
   Failure failure_;
@@ -223,13 +235,13 @@ class TwoLevelStepper : public StepperBase<ModelT> {
     aprev_ = this->a_ - r * (this->a_ - aprev_);
     Base::set_dt(h);
   }
-  void checkpoint() {
-    Base::checkpoint();
-    ck_aprev_ = aprev_;
+  void checkpoint(int slot = 0) {
+    Base::checkpoint(slot);
+    ck_aprev_[static_cast<size_t>(slot)] = aprev_;
   }
-  void rollback() {
-    Base::rollback();
-    aprev_ = ck_aprev_;
+  void rollback(int slot = 0) {
+    Base::rollback(slot);
+    aprev_ = ck_aprev_[static_cast<size_t>(slot)];
   }
 
   Index state_size() const { return this->size_with(this->size()); }
@@ -243,7 +255,8 @@ class TwoLevelStepper : public StepperBase<ModelT> {
     aprev_ = this->a_;
   }
 
-  Vector aprev_, ck_aprev_;
+  Vector aprev_;
+  std::array<Vector, Base::kCheckpoints> ck_aprev_;
 };
 
 }  // namespace nvib

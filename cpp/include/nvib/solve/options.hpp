@@ -57,14 +57,16 @@ struct SolveOptions {
   // Estimate every DOF's error relative to its peak from the accepted steps (error_estimate.hpp) into
   // Result::error_estimate.
   bool error_estimate = true;
-  // Adaptive steps (adaptive.hpp): NaN (the default) runs at the fixed step dt; a number in (0, 1) chooses
-  // each step so that the error estimate stays within it (relative to each DOF's peak), dt being the
-  // first step. max_dt: the longest step (NaN: dt for the explicit schemes, 10 dt for the others);
-  // min_dt: the shortest, below which the run stops with a message (NaN: 1e-6 dt).
+  // Adaptive steps (adaptive.hpp): NaN (the default) runs at the fixed step dt; a number in (0, 1) asks
+  // for a run whose error relative to each DOF's peak stays within it: the steps are chosen as the run
+  // goes, and a companion run on double steps measures the error (a run that misses tol is redone with
+  // a tighter control). dt is the first step. max_dt: the longest step of the companion run (NaN: dt for
+  // the explicit schemes, 10 dt for the others); min_dt: its shortest, below which the run stops with a
+  // message (NaN: 1e-6 dt).
   double tol = std::numeric_limits<double>::quiet_NaN();
   double max_dt = std::numeric_limits<double>::quiet_NaN();
   double min_dt = std::numeric_limits<double>::quiet_NaN();
-  // For testing the rejection: every k-th step is first tried at twice its length and rejected whatever
+  // For testing the rejection: every k-th companion step is first tried at twice its length and rejected whatever
   // its error (a retaken step must equal one taken once). 0: never.
   std::int64_t reject_every = 0;
 };
