@@ -1,11 +1,13 @@
 """Whether an adaptive run (solve(..., tol=)) meets its tolerance: the true error against tol.
 
-For each of the paper's scenes and each scheme with an estimate (PIM has none and refuses a tol), at
+For each of the paper's scenes and each scheme with a local control (PIM has none and refuses a tol), at
 tol = 1e-3 and 1e-4: the true error max_t |u_i - u_ref,i| / max_t |u_ref,i| of the worst DOF (a DOF whose
 peak is under 1e-3 of the largest is measured against 1e-3 of the largest) at every accepted step (all
 are saved), against the closed form or DOP853 with contact events (nvib.reference), its ratio to tol,
-the run's own estimate, and the accepted, retaken and event steps. The scene's dt is the first step
-(and an explicit scheme's longest).
+the run's own estimate (the answer against its companion run on double steps) and its ratio to the
+truth, the answer's steps, the companion's, the retaken ones, the events landed, the restarts and the
+wall time of the whole run (every attempt). The scene's dt is the first step (and an explicit scheme's
+longest companion step).
 
     python benchmarks/adaptive_tolerance.py [--out benchmarks/results/adaptive_tolerance.md]
 """

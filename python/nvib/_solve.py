@@ -88,7 +88,11 @@ class ErrorEstimate:
     The estimate is the leading phase error of the scheme on each mode, c h^2 tau |da/dt|, with c the
     scheme's error constant (its principal eigenvalue against exp(i w h)) and tau the age of the motion
     (its damping, viscous and hysteretic, forgets): see ``cpp/include/nvib/solve/error_estimate.hpp``.
-    Measured against closed forms and DOP853 in ``benchmarks/results/error_estimate.md``."""
+    Measured against closed forms and DOP853 in ``benchmarks/results/error_estimate.md``.
+
+    An adaptive run's (``tol`` set) is measured instead: the difference between the run and a companion
+    run on double steps, divided by 2^order - 1 (``cpp/include/nvib/solve/adaptive.hpp``; measured in
+    ``benchmarks/results/adaptive_tolerance.md``)."""
 
     def __init__(self, per_dof: np.ndarray, names: list[str], dt: float, order: int, tol: float = math.nan):
         self.per_dof = np.asarray(per_dof, dtype=float)
@@ -151,6 +155,16 @@ def _error_note(res: Result, limit: float) -> str | None:
             f"nvib.cost measures the true error against a reference")
 
 
+def _tol_note(res: Result) -> str | None:
+    """The warning of an adaptive run that ended above its tol (its restarts used up)."""
+    est = error_estimate(res)
+    if res.status != Status.success or est is None or math.isnan(est.tol) or not est.max > est.tol:
+        return None
+    return (f"the estimated error {est.max:.2g} of the peak of {est.dof} exceeds tol = {est.tol:g} after "
+            f"{res.stats.num_restarts} restarts with a tighter control: a smaller max_dt, or another scheme, "
+            f"would meet it")
+
+
 def _extras(self) -> dict:
     return self._extras if isinstance(self._extras, dict) else {}
 
@@ -194,9 +208,9 @@ def _annotate(res: Result, model: Model, warn: _Warn, note: str | None = None) -
     order = getattr(res.scheme, "order_u", 2)
     res._extras = {"ground": ground, "relative_to_ground": ground is not None, "units": units, "warnings": warnings,
                    "all_dofs": model.dofs, "order": order if isinstance(order, int) else 2, "tol": warn.tol}
-    error_note = _error_note(res, warn.error)
-    if error_note:
-        warnings.append(error_note)
+    for note in (_error_note(res, warn.error), _tol_note(res)):
+        if note:
+            warnings.append(note)
     return res
 
 

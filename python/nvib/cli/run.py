@@ -354,6 +354,8 @@ def effect_line(rec, res, model) -> str:
 
 
 def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args) -> None:
+    import numpy as np
+
     from .._model import rate_unit
 
     s = model.scene
@@ -368,8 +370,13 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
     saved = f"{len(res.t)} state{'s' if len(res.t) != 1 else ''} saved"
     if save_every > 1:
         saved += f" (every {save_every} steps)"
-    lines.append(("steps", f"{stats['num_steps']} of {res.num_steps_requested}, dt = {dt:g} s, "
-                           f"t_end = {t_end:g} s; {saved}"))
+    if args.tol:
+        h = np.diff(res.t) if save_every == 1 and len(res.t) > 1 else None
+        span = f", from {h.min():.3g} to {h.max():.3g} s" if h is not None else ""
+        lines.append(("steps", f"{stats['num_steps']} adaptive (first {dt:g} s{span}), t_end = {t_end:g} s; {saved}"))
+    else:
+        lines.append(("steps", f"{stats['num_steps']} of {res.num_steps_requested}, dt = {dt:g} s, "
+                               f"t_end = {t_end:g} s; {saved}"))
     lines.append(("status", res.status.name))
     lines.append(("wall time", f"{c.seconds(elapsed)} (integrator loop {c.seconds(stats['wall_time'])})"))
     counters = [(k.removeprefix("num_"), v) for k, v in stats.items()
@@ -386,10 +393,12 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
                                       + (" (relative to the ground)" if res.relative_to_ground else "")))
     est = res.error_estimate
     if est is not None:
-        adaptive = f"; adaptive, tol {args.tol:g}: {stats['num_rejected_steps']} steps retaken, " \
-            f"{stats['num_events']} landed on events" if args.tol else ""
+        how = (f"measured against a companion run on double steps; adaptive, tol {args.tol:g}: "
+               f"{stats['num_check_steps']} companion steps, {stats['num_rejected_steps']} retaken, "
+               f"{stats['num_events']} landed on events, {stats['num_restarts']} restarts") if args.tol else \
+            "estimated from the steps"
         lines.append(("error estimate", f"{est.max:.2g} of the peak of {est.dof} (max |u - u_exact| / max |u|, "
-                                        f"estimated from the steps{adaptive})" if est.available else
+                                        f"{how})" if est.available else
                       "not available for this scheme (exact on linear modes; nvib cost measures its error)"))
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
