@@ -11,6 +11,10 @@ their own saved displacements measured against the same reference. It writes
     results/cost_<scene>.png    one work-precision diagram per scene
     results/cost_rows.csv       every row (all fields of nvib.cost)
 
+Adaptive runs (solve(..., tol=), tol 1e-2 ... 1e-6) of every scheme that takes a tol are a curve of
+their own, compared at equal error with the best fixed step and the best SciPy run on every scene
+(issue 21: vehicle >= 30x SciPy, building >= 50x).
+
 Targets (issue 4), ratios measured in this one run:
   * equal error: 1e-6 relative on floor 6 (x6) of the building, 1e-5 on
     wheelset 1 (z_w1) of the vehicle: the cheapest nvib run reaching it is
@@ -40,7 +44,7 @@ import time
 import numpy as np
 
 import nvib
-from nvib.analysis.cost import FIELDS, cheapest, markdown_table, plot_work_precision, time_at_error
+from nvib.analysis.cost import FIELDS, cheapest, markdown_table, plot_work_precision, setting_text, time_at_error
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -75,6 +79,9 @@ SCENES = {
                     target=1e-5, loop="vehicle"),
 }
 MAX_STEPS = (1_000_000, 300_000)
+TOLS = geometric(1e-2, 10 ** 0.5, 9)  # adaptive runs (solve(..., tol=)): 1e-2 ... 1e-6
+# The error at which the adaptive runs are compared with the best fixed step and the best SciPy run
+ADAPTIVE_TARGETS = {"pendulum": 1e-4, "pendulum_ic2": 1e-4, "hardening": 1e-4, "building": 1e-6, "vehicle": 1e-5}
 
 
 # ---------------------------------------------------------------- hand-written loops
@@ -135,10 +142,16 @@ def run_scene(name: str, cfg: dict, exes: dict | None, args, tmp: str) -> dict:
     dts = cfg["dts"][:: 2 if args.quick else 1]
     rtols = cfg["rtols"][:: 2 if args.quick else 1]
     rows = []
+    adaptive_done: set = set()
     for scheme in schemes():
         cap = MAX_STEPS[0] if scheme.is_explicit else MAX_STEPS[1]
         mine = [dt for dt in dts if t_end / dt <= cap]
         rows += nvib.cost(model, [scheme], mine, dofs=cfg["dofs"], reference=ref, repeats=args.repeats)
+        if scheme.adaptive and scheme.label not in adaptive_done:  # one adaptive curve per scheme and Newton mode
+            adaptive_done.add(scheme.label)
+            rows += [r for r in nvib.cost(model, [scheme], [model.scene["dt"]], tols=TOLS[:: 2 if args.quick else 1],
+                                          dofs=cfg["dofs"], reference=ref, repeats=args.repeats)
+                     if r["tol"] == r["tol"]]
         print(f"  {name}: {nvib.scheme_label(scheme)} done", file=sys.stderr)
     rows += nvib.cost_scipy(model, rtols=rtols, dofs=cfg["dofs"], reference=ref, repeats=args.repeats,
                             max_time=args.max_time)
@@ -163,10 +176,36 @@ def summary_table(rows: list[dict], levels=(1e-2, 1e-4, 1e-6, 1e-8)) -> list[str
             if r is None:
                 cells.append("-")
             else:
-                setting = f"rtol {r['rtol']:.1e}" if who == "scipy" else f"dt {r['dt']:.3g}"
-                cells.append(f"{r['wall_time'] * 1e3:.3g} ms ({setting})")
+                cells.append(f"{r['wall_time'] * 1e3:.3g} ms ({setting_text(r)})")
         cells.append(str(sum(r["status"] not in ("success", "skipped") for r in rs)))
         lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def _adaptive(row: dict) -> bool:
+    return row["contender"] == "nvib" and row["tol"] == row["tol"]
+
+
+def adaptive_rows(results: dict) -> list[str]:
+    """Per scene: the cheapest adaptive nvib run, fixed-step nvib run and SciPy run reaching the target error."""
+    lines = ["| scene | error on | target | cheapest adaptive run | its error | [ms] | cheapest fixed step | its error "
+             "| [ms] | cheapest SciPy run | its error | [ms] | fixed / adaptive | SciPy / adaptive |",
+             "|---|---|---:|---|---:|---:|---|---:|---:|---|---:|---:|---:|---:|"]
+    for name, res in results.items():
+        target = ADAPTIVE_TARGETS[name]
+        rows = res["rows"]
+        ad = cheapest([r for r in rows if _adaptive(r)], target)
+        fx = cheapest([r for r in rows if r["contender"] == "nvib" and not _adaptive(r)], target)
+        sp = cheapest(rows, target, contender="scipy")
+
+        def cells(r):
+            return ["none reaches it", "", ""] if r is None else \
+                [f"{r['label'].removesuffix(', tol')}, {setting_text(r)}", f"{r['max_error']:.2e}", f"{r['wall_time'] * 1e3:.3g}"]
+
+        def ratio(r):
+            return f"**{r['wall_time'] / ad['wall_time']:.2g}x**" if r is not None and ad is not None else "-"
+        lines.append("| " + " | ".join([name, SCENES[name]["dofs"][0], f"{target:g}", *cells(ad), *cells(fx),
+                                        *cells(sp), ratio(fx), ratio(sp)]) + " |")
     return lines
 
 
@@ -190,7 +229,7 @@ def equal_error_rows(results: dict) -> list[str]:
         if nv and sp:
             ratio = sp["wall_time"] / nv["wall_time"]
             lines.append(
-                f"| {name} | {SCENES[name]['dofs'][0]} | {target:g} | {nv['label']}, dt = {nv['dt']:.3g} s | "
+                f"| {name} | {SCENES[name]['dofs'][0]} | {target:g} | {nv['label']}, {setting_text(nv)} | "
                 f"{nv['max_error']:.2e} | {nv['wall_time'] * 1e3:.3g} | {sp['label']}, rtol = {sp['rtol']:.2e} | "
                 f"{sp['max_error']:.2e} | {sp['wall_time'] * 1e3:.3g} | **{ratio:.1f}x** | {interp:.1f}x | "
                 + (f"{lp['wall_time'] * 1e3:.3g} ({lp['label'].removeprefix('hand-written ')}, dt = {lp['dt']:.3g})"
@@ -302,7 +341,8 @@ def main() -> int:
         f"`g++ {' '.join(CXXFLAGS)}`) are timed inside the C++ program (best of 3, output preallocated).",
         "- **Energy error**: nvib's energy balance (`Result.energy.relative_balance_error()`), in "
         "`cost_rows.csv`; the SciPy rows have it only for the conservative scenes (pendulum, hardening).",
-        "- nvib runs with more than 1,000,000 steps (explicit schemes) or 300,000 steps (the others) are not made.",
+        "- nvib runs with more than 1,000,000 steps (explicit schemes) or 300,000 steps (the others) are not made; "
+        "the adaptive runs (`tol` from 1e-2 to 1e-6, the scene's dt their first step) are all made.",
         "- OpenSees: not in this comparison; the building side by side with OpenSees 3.7.1 is "
         "`benchmarks/opensees.py` (`opensees.md`).", ""]
     if cpu is not None or any(n in results for n in ("building", "vehicle")):
@@ -313,6 +353,13 @@ def main() -> int:
                   "method and tolerance). *Interpolated*: the same with each curve's time at exactly the "
                   "target error, interpolated in log–log between its two runs around it.", ""]
         lines += equal_error_rows(results) + [""]
+    if results:
+        lines += ["### Adaptive runs at equal error (issue 21: against SciPy, vehicle >= 30x, building >= 50x; "
+                  "against the best fixed step)", "",
+                  "The cheapest adaptive run (`solve(..., tol=)`, tol from 1e-2 to 1e-6, every scheme that takes "
+                  "a tol; its time includes the companion run on double steps and any restart), the cheapest "
+                  "fixed-step nvib run and the cheapest SciPy run reaching the error on the named DOF.", ""]
+        lines += adaptive_rows(results) + [""]
     if cpu is not None:
         lines += ["### CPU time on the building at dt = 1e-4 s, t_end = 10 s (Yang et al. 2017, section 5.1)", "",
                   "Best of " f"{args.cpu_rounds} rounds x {args.repeats} runs of the whole `nvib.solve()` call, "

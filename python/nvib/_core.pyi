@@ -84,6 +84,7 @@ class _Scheme:
     short_label: str
     order_u: int
     order_v: int
+    adaptive: bool
     def __init__(self, *args: Any, **kwargs: Any) -> None: ...
     @staticmethod
     def parameters() -> list[dict[str, Any]]: ...

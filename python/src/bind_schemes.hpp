@@ -239,7 +239,10 @@ void bind_scheme(py::module_& m, py::list& keys) {
                              "short name for tables and legends (with the Newton mode of an implicit scheme)")
       .def_property_readonly("short_label", &S::label, "the label without the Newton mode")
       .def_property_readonly("order_u", &S::order_u, "global order of accuracy of the displacement")
-      .def_property_readonly("order_v", &S::order_v, "global order of accuracy of the reported velocity");
+      .def_property_readonly("order_v", &S::order_v, "global order of accuracy of the reported velocity")
+      .def_property_readonly(
+          "adaptive", [](const S& s) { return nvib::cached_error_constants(s).available; },
+          "whether solve(..., tol=) takes the scheme: it has a local control of its step (PIM has none)");
   if constexpr (nvib::has_newton<S>::value)
     cls.def_property_readonly("iteration", [](const S& s) { return nvib::to_string(s.newton.iteration); });
   py::list factories;

@@ -235,3 +235,17 @@ def test_work_precision_diagram_stars_the_cheapest_run_at_the_target(rows):
     assert any(best["nvib"]["label"] in t and f"dt = {best['nvib']['dt']:g} s" in t for t in labels)
     # without a target nothing is starred
     assert not [ln for ln in work_precision_figure(rows).axes[0].lines if ln.get_marker() == "*"]
+
+
+def test_adaptive_runs_are_a_curve_of_their_own(hardening):
+    """tols= adds one row per (scheme that takes a tol, tol), labelled '<scheme>, tol', its error within
+    3 tol on the measured DOF (the tol holds on every DOF); PIM, without a local control, has none."""
+    rows = nvib.cost(hardening, [nvib.Newmark(), nvib.PreciseIntegration()], [1e-3], tols=[1e-3, 1e-4], repeats=1)
+    adaptive = [r for r in rows if not math.isnan(r["tol"])]
+    assert [(r["label"], r["tol"]) for r in adaptive] == [("Newmark (newton), tol", 1e-3), ("Newmark (newton), tol", 1e-4)]
+    for r in adaptive:
+        assert r["status"] == "success" and r["max_error"] <= 3.0 * r["tol"] and r["dt"] == 1e-3
+    assert adaptive[1]["num_steps"] > adaptive[0]["num_steps"]
+    assert all(math.isnan(r["tol"]) for r in rows if r["label"].startswith("PIM"))
+    with pytest.raises(nvib.ArgumentError, match="tols"):
+        nvib.cost(hardening, [nvib.Newmark()], [1e-3], tols=[2.0])

@@ -192,3 +192,11 @@ def test_reference_bad_input_names_the_argument():
         ref([0.5])
     with pytest.raises(ValueError, match="dofs"):
         ref.u([0.1], dofs=["y"])
+
+
+def test_a_model_with_memory_has_no_dop853_reference():
+    """DOP853 integrates F(u, v, t) only: a bilinear storey would be followed from its initial state. The
+    reference refuses such a model and names its laws, rather than return a wrong trajectory."""
+    model = nvib.load_scene("building_inelastic")
+    with pytest.raises(nvib.ArgumentError, match=r"model: its laws with memory \(storey1"):
+        nvib.reference(model, 1.0)

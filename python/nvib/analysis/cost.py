@@ -7,6 +7,7 @@ takes), with the same keys for nvib, SciPy and any other contender:
     scheme      the scheme's full name (scheme.name) or the SciPy method
     label       a short name for plots and tables
     dt, rtol    the fixed step (nvib) or the relative tolerance (SciPy); NaN where it does not apply
+    tol         an adaptive nvib run's tolerance (solve(..., tol=)), its dt then the first step; NaN otherwise
     t_end, dofs the span and the DOFs the error is measured on (comma-separated names)
     max_error   max over the saved times and the chosen DOFs of |u - u_ref|,
                 divided by max |u_ref| over the same times and DOFs
@@ -71,7 +72,7 @@ SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
 SCIPY_RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 SCIPY_MIN_RTOL = 2.3e-14  # solve_ivp's floor, 100 machine epsilons (as reference's DOP853 rtol)
 _JACOBIAN_METHODS = ("Radau", "BDF", "LSODA")
-FIELDS = ("contender", "scheme", "label", "dt", "rtol", "t_end", "dofs", "max_error", "energy_error", "wall_time",
+FIELDS = ("contender", "scheme", "label", "dt", "rtol", "tol", "t_end", "dofs", "max_error", "energy_error", "wall_time",
           "repeats", "num_steps", "force_evals", "tangent_evals", "newton_iters", "factorizations", "status",
           "message", "reference")
 NAN = float("nan")
@@ -147,13 +148,16 @@ def _check_common(repeats, long_run):
     return repeats, long_run
 
 
-def cost(model: Model, schemes, dts, *, t_end: float | None = None, dofs=None, reference: Reference | None = None,
-         repeats: int = 3, energy: bool = True, max_saved: int = 100_000, long_run: float = 1.0,
-         max_displacement: float | None = None, progress=None) -> list[dict]:
-    """One row per (scheme, dt): error against the reference, energy error, best wall time, counters, status.
+def cost(model: Model, schemes, dts, *, tols=(), t_end: float | None = None, dofs=None,
+         reference: Reference | None = None, repeats: int = 3, energy: bool = True, max_saved: int = 100_000,
+         long_run: float = 1.0, max_displacement: float | None = None, progress=None) -> list[dict]:
+    """One row per (scheme, dt) and per (scheme, tol): error against the reference, energy error, best wall
+    time, counters, status.
 
     model : an nvib.Model (t_end defaults to its scene's). schemes : nvib scheme
-    objects. dts : steps. dofs : DOF names or indices the error is measured on
+    objects. dts : steps. tols : tolerances of adaptive runs (``solve(..., tol=)``, the largest of dts
+    their first step; labelled "<scheme>, tol"; a scheme without a local control, PIM, is left out of
+    them). dofs : DOF names or indices the error is measured on
     (default: all). reference : a precomputed ``nvib.reference(model, t_end)``
     (computed, and cached per model, when not given). repeats : timed runs per
     row, the best is kept (a run longer than ``long_run`` seconds is timed
@@ -170,6 +174,10 @@ def cost(model: Model, schemes, dts, *, t_end: float | None = None, dofs=None, r
     dts = [_checks.number("dts", dt) for dt in np.atleast_1d(np.asarray(dts, dtype=float)).tolist()]
     if not dts:
         raise _checks.value_error("dts", "give at least one step")
+    tols = [_checks.real("tols", tol, positive=True) for tol in np.atleast_1d(np.asarray(tols, dtype=float)).tolist()]
+    for tol in tols:
+        if not tol < 1.0:
+            raise _checks.value_error("tols", f"each must lie in (0, 1) (an error relative to a peak), got {tol:g}")
     t_end = _t_end(model, t_end)
     for dt in dts:  # the core's checks of a run's step, naming the list the step came from
         try:
@@ -185,22 +193,28 @@ def cost(model: Model, schemes, dts, *, t_end: float | None = None, dofs=None, r
     with_energy = bool(energy) and bool(model._core.accounts_energy)
     names = ",".join(model.dofs[c] for c in cols)
     rows = []
-    total = len(schemes) * len(dts)
-    for scheme in schemes:
-        for dt in dts:
-            rows.append(_nvib_row(model, scheme, dt, t_end, cols, names, ref, repeats, long_run, with_energy,
-                                  max_saved, max_displacement))
-            if progress is not None:
-                progress(len(rows), total, rows[-1])
+    adaptive = [s for s in schemes if s.adaptive] if tols else []
+    total = len(schemes) * len(dts) + len(adaptive) * len(tols)
+    runs = [(scheme, dt, math.nan) for scheme in schemes for dt in dts] + \
+        [(scheme, max(dts), tol) for scheme in adaptive for tol in tols]
+    for scheme, dt, tol in runs:
+        rows.append(_nvib_row(model, scheme, dt, tol, t_end, cols, names, ref, repeats, long_run, with_energy,
+                              max_saved, max_displacement))
+        if progress is not None:
+            progress(len(rows), total, rows[-1])
     return rows
 
 
-def _nvib_row(model, scheme, dt, t_end, cols, names, ref, repeats, long_run, with_energy, max_saved,
+def _nvib_row(model, scheme, dt, tol, t_end, cols, names, ref, repeats, long_run, with_energy, max_saved,
               max_displacement) -> dict:
+    adaptive = not math.isnan(tol)
     n_steps = _core.steps_to_reach(0.0, t_end, dt)
-    save_every = max(1, math.ceil(n_steps / (max_saved - 1)))
+    save_every = 1 if adaptive else max(1, math.ceil(n_steps / (max_saved - 1)))
     kw = dict(dt=dt, t_end=t_end, save_every=save_every, dofs=cols, throw=False, max_displacement=max_displacement)
-    base = dict(contender="nvib", scheme=scheme.name, label=scheme_label(scheme), dt=dt, t_end=t_end, dofs=names,
+    if adaptive:
+        kw["tol"] = tol
+    label = scheme_label(scheme) + (", tol" if adaptive else "")
+    base = dict(contender="nvib", scheme=scheme.name, label=label, dt=dt, tol=tol, t_end=t_end, dofs=names,
                 reference=ref.description)
     t0 = time.perf_counter()
     # The energy is a measurement here, not a stopping rule: the row's status is what solve() does without it.
@@ -364,7 +378,7 @@ def time_at_error(rows: list[dict], target: float) -> dict:
         groups.setdefault((r["contender"], r["label"]), []).append(r)
     for key, rs in groups.items():
         ok = [r for r in rs if r["status"] == "success" and r["max_error"] > 0]
-        ok.sort(key=lambda r: -(r["rtol"] if r["contender"] == "scipy" else r["dt"]))
+        ok.sort(key=_setting)
         out[key] = NAN
         for i, r in enumerate(ok):
             if r["max_error"] <= target:
@@ -378,6 +392,22 @@ def time_at_error(rows: list[dict], target: float) -> dict:
                                                                         math.log(a["wall_time"])))
                 break
     return out
+
+
+def _setting(row: dict) -> float:
+    """The order of a curve's runs, the loosest first: SciPy's rtol, an adaptive run's tol, else dt."""
+    if row["contender"] == "scipy":
+        return -row["rtol"]
+    tol = row.get("tol", NAN)
+    return -(tol if isinstance(tol, float) and not math.isnan(tol) else row["dt"])
+
+
+def setting_text(row: dict) -> str:
+    """'dt = .. s', 'tol = ..' (an adaptive nvib run) or 'rtol = ..' (SciPy): what a row's run was given."""
+    if row["contender"] == "scipy":
+        return f"rtol = {row['rtol']:g}"
+    tol = row.get("tol", NAN)
+    return f"tol = {tol:g}" if isinstance(tol, float) and not math.isnan(tol) else f"dt = {row['dt']:g} s"
 
 
 def _fmt(x, spec: str = ".3g") -> str:
@@ -394,14 +424,16 @@ def _fmt(x, spec: str = ".3g") -> str:
 
 def markdown_table(rows: list[dict]) -> str:
     """The rows as a markdown table (times in ms)."""
-    head = ["contender", "scheme", "dt [s]", "rtol", "max error", "energy error", "wall time [ms]", "runs", "steps",
+    head = ["contender", "scheme", "dt [s]", "rtol or tol", "max error", "energy error", "wall time [ms]", "runs", "steps",
             "force evals", "Newton it.", "factorisations", "status"]
     lines = ["| " + " | ".join(head) + " |", "|" + "|".join(["---", "---"] + ["---:"] * 10 + ["---"]) + "|"]
     for r in rows:
         msg = r["message"]
         status = r["status"] if not msg else (msg if msg.startswith(r["status"]) else f"{r['status']}: {msg}")
         wall = r["wall_time"] * 1e3 if isinstance(r["wall_time"], float) and math.isfinite(r["wall_time"]) else NAN
-        cells = [r["contender"], r["label"], _fmt(r["dt"]), _fmt(r["rtol"], ".0e"), _fmt(r["max_error"], ".2e"),
+        tol = r.get("tol", NAN)
+        setting = r["rtol"] if isinstance(tol, float) and math.isnan(tol) else tol
+        cells = [r["contender"], r["label"], _fmt(r["dt"]), _fmt(setting, ".0e"), _fmt(r["max_error"], ".2e"),
                  _fmt(r["energy_error"], ".2e"), _fmt(wall, ".3g"), _fmt(r["repeats"]), _fmt(r["num_steps"], "int"),
                  _fmt(r["force_evals"], "int"), _fmt(r["newton_iters"], "int"), _fmt(r["factorizations"], "int"),
                  status.replace("|", "/")]
@@ -438,7 +470,7 @@ def work_precision_figure(rows: list[dict], *, title: str | None = None, target:
     for i, ((who, label), rs) in enumerate(groups.items()):
         color = palette(((2 * i) % 20 + (2 * i // 20) % 2) / 19.999)  # the dark shades first, then the light
         ok = [r for r in rs if r["status"] == "success" and r["max_error"] > 0]
-        ok.sort(key=lambda r: -(r["dt"] if who != "scipy" else r["rtol"]))
+        ok.sort(key=_setting)
         failed = sum(r["status"] not in ("success", "skipped") for r in rs)
         ls, marker = styles.get(who, (":", "^"))
         name = label if label.startswith(("SciPy", who)) or who == "nvib" else f"{who}: {label}"
@@ -456,7 +488,7 @@ def work_precision_figure(rows: list[dict], *, title: str | None = None, target:
             best = cheapest(rows, target, contender=who)
             if best is None or not best["max_error"] > 0:
                 continue
-            setting = f"dt = {best['dt']:g} s" if who != "scipy" else f"rtol = {best['rtol']:g}"
+            setting = setting_text(best)
             ax.plot(best["wall_time"], best["max_error"], marker="*", ms=16, mfc="gold", mec="k", mew=1.0,
                     ls="none", zorder=5, label=f"cheapest {who} at error <= {target:g}")
             ax.annotate(f"{best['label']}\n{setting}, {best['wall_time']:.3g} s", (best["wall_time"], best["max_error"]),

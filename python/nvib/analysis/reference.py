@@ -329,6 +329,12 @@ def reference(model: Model, t_end: float, *, t0: float = 0.0, u0=None, v0=None, 
     rtol = _checks.real("rtol", rtol, positive=True)
     if not 2.3e-14 <= rtol < 1.0:
         raise _checks.value_error("rtol", f"must be in [2.3e-14, 1) (DOP853 cannot go below 100 machine epsilons), got {rtol}")
+    memory = [e.name or e.type for e in (model.effects or []) if e.has_state]
+    if memory:  # DOP853 sees F(u, v, t) only: it would integrate every such law from its initial state
+        raise _checks.value_error("model", f"its laws with memory ({', '.join(dict.fromkeys(memory))}) carry internal "
+                                           "variables that DOP853 on F(u, v, t) cannot follow; measure against an "
+                                           "nvib run at a much smaller step, or an adaptive run with a tight tol "
+                                           "(its Result.error_estimate is measured against a companion run)")
     u0 = model.u0 if u0 is None else _checks.vector("u0", u0, model.n)
     v0 = model.v0 if v0 is None else _checks.vector("v0", v0, model.n)
     key = (t0, t_end, u0.tobytes(), v0.tobytes(), method, rtol)

@@ -8,7 +8,7 @@ import time
 
 from . import _common as c
 
-COST_FLAGS = {"dts": "--dt", "t_end": "--t-end", "rtols": "--rtol", "repeats": "--repeats",
+COST_FLAGS = {"dts": "--dt", "tols": "--tol", "t_end": "--t-end", "rtols": "--rtol", "repeats": "--repeats",
               "max_time": "--max-time", "methods": "--scipy", "dofs": "--dof"}
 
 
@@ -36,6 +36,9 @@ def add_parser(sub) -> None:
                    help="schemes, the implicit ones optionally as NAME:MODE (a Newton mode) "
                         f"(default: {' '.join(default_schemes())})")
     p.add_argument("--dt", type=c.positive_real, nargs="+", help="steps (default: the scene's dt x 4, 2, 1, ... 1/32)")
+    p.add_argument("--tol", type=c.positive_real, nargs="+", metavar="TOL",
+                   help="also adaptive runs (solve(..., tol=)) of each scheme that takes a tol, at these tolerances "
+                        "(the largest --dt their first step), a curve '<scheme>, tol' each")
     p.add_argument("--t-end", type=c.positive_real, metavar="T", help="end time [s] (default: the scene's)")
     p.add_argument("--dof", nargs="+", metavar="NAME", help="DOFs the error is measured on (default: plot_dof)")
     p.add_argument("--scipy", nargs="+", metavar="METHOD", choices=("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA"),
@@ -77,7 +80,7 @@ def cost_scheme(text: str):
 
 def run(args) -> int:
     from .. import cost as run_cost, cost_scipy, reference
-    from ..analysis.cost import SCIPY_METHODS, SCIPY_RTOLS, cheapest, markdown_table, plot_work_precision
+    from ..analysis.cost import SCIPY_METHODS, SCIPY_RTOLS, cheapest, markdown_table, plot_work_precision, setting_text
     from .. import _core
     from .run import load_model, step_error
 
@@ -115,14 +118,13 @@ def run(args) -> int:
 
     def progress(done, total, row):
         if show:
-            what = f"{row['label']} dt = {row['dt']:g}" if row["contender"] == "nvib" else \
-                f"{row['label']} rtol = {row['rtol']:g}"
+            what = f"{row['label']} {setting_text(row)}"
             print(f"\r  {row['contender']} {done}/{total}: {what:<48}", end="", file=sys.stderr, flush=True)
 
     t0 = time.perf_counter()
     try:
         ref = reference(model, t_end)
-        rows = run_cost(model, schemes, dts, t_end=t_end, dofs=dofs, reference=ref, repeats=args.repeats,
+        rows = run_cost(model, schemes, dts, tols=args.tol or (), t_end=t_end, dofs=dofs, reference=ref, repeats=args.repeats,
                         progress=progress)
         if methods:
             rows += cost_scipy(model, methods, rtols, t_end=t_end, dofs=dofs, reference=ref, repeats=args.repeats,
@@ -146,7 +148,7 @@ def run(args) -> int:
         lines.append("")
         for who in sorted({r["contender"] for r in rows}):
             r = cheapest(rows, args.target, contender=who)
-            setting = "" if r is None else (f"dt = {r['dt']:g}" if who == "nvib" else f"rtol = {r['rtol']:g}")
+            setting = "" if r is None else setting_text(r)
             lines.append(f"- {who}: " + ("none reaches it" if r is None else
                                          f"{r['label']}, {setting}: error {r['max_error']:.2e}, "
                                          f"{r['wall_time'] * 1e3:.3g} ms"))

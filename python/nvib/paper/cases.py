@@ -95,7 +95,8 @@ ETA_PROBLEMS = (
     ("pendulum IC2, Δt = 0.3 s", "pendulum_ic2", 0.3, 10.0),
 )
 
-RUN_FIELDS = ("case", "claim", "scene", "scheme", "dt", "t_end", "dof", "status", "max_error", "energy_error",
+RUN_FIELDS = ("case", "claim", "scene", "scheme", "dt", "t_end", "dof", "status", "max_error", "error_estimate",
+              "energy_error",
               "locus_error", "state_error", "max_abs_u", "t_over_the_top", "energy_end_over_start",
               "newton_iters_per_step", "max_residual", "force_evals", "wall_time", "reference")
 
@@ -192,6 +193,8 @@ def measure(s: Setting, scheme, *, repeats: int = 3, case: str = "", claim: str 
         ur, vr = s.ref(res.t)
         out["state_error"] = float(np.max(np.hypot((u - ur[:, s.col]) / s.orbit.scale[0],
                                                    (v - vr[:, s.col]) / s.orbit.scale[1])))
+    est = res.error_estimate  # the run's own estimate (all DOFs; NaN for PIM), beside the measured error
+    out["error_estimate"] = est.max if est is not None else math.nan
     out["max_abs_u"] = float(np.max(np.abs(u)))
     if _is_pendulum(s.model):
         over = np.flatnonzero(np.abs(u) > math.pi)

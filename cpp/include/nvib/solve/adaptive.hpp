@@ -7,12 +7,12 @@
 // steps). Both are the same scheme of global order p on the same grid, so the companion's error is
 // 2^p times the answer's where the steps resolve the motion, and the answer's error is
 //     estimate_i = max_t |u_i - u_companion,i| / (2^p - 1) / peak_i
-// (Richardson; p = 2, or 1 for a first-order scheme). This is the answer's Result::error_estimate. It
-// sees what no local formula saw within a factor 3: the amplitude-dependent period of anharmonic
-// motion, and the timing of wheel impacts. An attempt that ends above tol is redone from the start
-// (slot 2) with a tighter control, at most kMaxRestarts times; the answer of the last attempt is
-// returned, its estimate telling how far it is. The price: the companion's half of the answer's steps,
-// and the attempts redone (Stats::num_check_steps, num_restarts).
+// (Richardson; p the scheme's order_u(): 2, or 1 for a first-order variant). This is the answer's
+// Result::error_estimate. It sees what no local formula saw within a factor 3: the amplitude-dependent
+// period of anharmonic motion, and the timing of wheel impacts. An attempt that ends above tol is
+// redone from the start (slot 2) with a tighter control, at most kMaxRestarts times; the answer of the
+// last attempt is returned, its estimate telling how far it is. The price: the companion's half of the
+// answer's steps, and the attempts redone (Stats::num_check_steps, num_restarts).
 //
 // The local control (error per unit step). Over a step the phase error of the fixed-step estimate
 // (error_estimate.hpp) grows at the rate rho_i = (c3 h^2 |da_i/dt| + c2 h |a_i|) / scale_i; a run of span
@@ -246,7 +246,7 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
   ClockPoll poll(opt.observe_period);
   std::int64_t done = 0, checked = 0, rejected = 0, landed = 0;
   // The answer's error: |u - u_companion| / (2^p - 1) per DOF, its largest so far, and the DOF's peak.
-  const double richardson = std::pow(2.0, order) - 1.0;
+  const double richardson = std::pow(2.0, st.scheme().order_u()) - 1.0;
   Vector companion(n), apart = Vector::Zero(n), top = st.u().cwiseAbs();
   bool answer_loaded = false;  // the stepper holds the answer's state (slot 1), not the companion's
   st.checkpoint(1);
