@@ -178,9 +178,16 @@ def _half(good, path):
 
 
 def _flipped(good, path):
-    """The file with one byte in its middle changed, as a bad disk or transfer leaves it."""
+    """The file with one byte in the middle of its u changed, as a bad disk or transfer leaves it (a byte
+    of the archive's own headers, such as a member's date, can change unseen)."""
+    import zipfile
+
     data = bytearray(good.read_bytes())
-    data[len(data) // 2] ^= 0xFF
+    with zipfile.ZipFile(good) as z:
+        member = z.getinfo("u.npy")
+    off = member.header_offset  # the local header: 30 bytes, the name, the extra field, then the data
+    start = off + 30 + int.from_bytes(data[off + 26:off + 28], "little") + int.from_bytes(data[off + 28:off + 30], "little")
+    data[start + member.compress_size // 2] ^= 0xFF
     path.write_bytes(bytes(data))
 
 
