@@ -64,8 +64,6 @@ class AdaptiveControl {
       : model_(model), c_(c), w_(blend), span_(span), floor_(floor) {
     b_.setZero(n);
     peak_.setZero(n);
-    jerk_.setZero(n);
-    level_.setZero(n);
   }
   template <class Stepper>
   void start(const Stepper& st) {
@@ -74,8 +72,8 @@ class AdaptiveControl {
     hyst0_ = model_.hysteretic_dissipation();
     t0_ = st.time();
   }
-  // The error rates of the step just taken (length h, state in st, not yet accepted) into rate_i_, and
-  // the worst DOF's rho T / tol: the ratio of the step's error rate to what tol allows.
+  // The worst DOF's rho T / control for the step just taken (length h, state in st, not yet accepted):
+  // the ratio of the step's error rate to what the control allows.
   template <class Stepper>
   double measure(const Stepper& st, double h, double tol) {
     const Index n = b_.size();
@@ -87,9 +85,8 @@ class AdaptiveControl {
     double worst = 0.0;
     for (Index k = 0; k < n; ++k) {
       const double now = (1.0 - w_) * a[k] + w_ * aprev_[k];
-      jerk_[k] = std::abs(now - b_[k]) / h;
-      level_[k] = std::abs(now);
-      const double rho = c_.c3 * h * h * jerk_[k] + c_.c2 * h * level_[k];
+      const double jerk = std::abs(now - b_[k]) / h;
+      const double rho = c_.c3 * h * h * jerk + c_.c2 * h * std::abs(now);
       const double scale = std::max(std::max(peak_[k], std::abs(u[k])), floor);
       if (scale > 0.0) worst = std::max(worst, rho / scale);
     }
@@ -129,7 +126,7 @@ class AdaptiveControl {
   Model& model_;
   ErrorConstants c_;
   double w_, span_, floor_;
-  Vector b_, aprev_, peak_, jerk_, level_;
+  Vector b_, aprev_, peak_;
   double rate_ = 0.0, dissipated_ = 0.0, kinetic_ = 0.0, hyst0_ = 0.0, t0_ = 0.0;
   std::int64_t accepted_ = 0;
 };
@@ -167,49 +164,29 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
                                                                                opt.save_every + 2, 1 << 20));
   Result res;
   res.num_steps_requested = 0;
-  observe::SavedHistory history(res, opt, n, capacity);
-  std::optional<observe::EnergyAccount<Model>> energy;
-  if (opt.energy) energy.emplace(res, model, capacity, energy_limit, dt0, opt.peaks);
-  std::optional<observe::EffectRecorder> recorder;
-  if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, capacity);
-  std::optional<observe::CollapseWatch> collapse;
-  if (set != nullptr && opt.stop_at_collapse) {
-    collapse.emplace(*set, opt.collapse_deformation);
-    if (!collapse->active()) collapse.reset();
-  }
-  std::optional<observe::PeakTracker> peaks;
-  if (opt.peaks) peaks.emplace(res, opt, n);
-  const double memory_limit = std::isnan(opt.max_history_bytes) ? 0.5 * available_memory_bytes() : opt.max_history_bytes;
-  const Index m = opt.dofs.empty() ? n : static_cast<Index>(opt.dofs.size());
-  const double row_bytes = history_bytes(1, m, opt.energy) +
-                           (opt.record.empty() ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record));
+  RunObservers<Model> obs(res, model, set, opt, n, capacity, energy_limit, dt0);
+  const double memory_limit = RunObservers<Model>::memory_limit(opt);
+  const double row_bytes =
+      RunObservers<Model>::row_bytes(opt, set, opt.dofs.empty() ? n : static_cast<Index>(opt.dofs.size()));
 
   double floor0 = 0.1 * load_scale;
   if (n > 0) floor0 = std::max(floor0, 0.1 * st.u().cwiseAbs().maxCoeff());
   observe::AdaptiveControl<Model> estimate(model, constants, error_blend(st.scheme()), n, t_end - t_start, floor0);
   const double order = observe::AdaptiveControl<Model>::order(constants);
 
-  Index row = 0;
-  auto save = [&] {
-    if (row == capacity) {
+  auto save = [&] {  // the history grows by doubling, under the memory limit
+    if (obs.row == capacity) {
       const std::int64_t more = 2 * capacity;
       NVIB_CHECK(memory_limit <= 0.0 || static_cast<double>(more) * row_bytes <= memory_limit, "save_every, dofs",
                  "the saved history would need " + detail::fmt(static_cast<double>(more) * row_bytes / 1e9) +
                      " GB, more than the limit of " + detail::fmt(memory_limit / 1e9) +
                      " GB; save fewer states (a larger save_every) or fewer DOFs (dofs)");
       capacity = more;
-      history.resize(capacity);
-      if (energy) energy->resize(capacity);
-      if (recorder) recorder->resize(capacity);
+      obs.resize(capacity);
     }
-    history.save(st, row);
-    if (energy) energy->save(st, row);
-    if (recorder) recorder->save(st, row);
-    ++row;
+    obs.save(st);
   };
-  if (energy) energy->start(st);
-  save();
-  if (peaks) peaks->update(st);
+  obs.start(st);
   estimate.start(st);
   estimate.prime(st);
 
@@ -242,7 +219,6 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
   const Stats before = st.stats();
   std::string why;
   const double bound = detail::divergence_bound(opt, st, t_end - t_start, load_scale, why);
-  double max_residual = std::numeric_limits<double>::quiet_NaN();
   ClockPoll poll(opt.observe_period);
   std::int64_t done = 0, checked = 0, rejected = 0, landed = 0;
   // The answer's error: |u - u_companion| / (2^p - 1) per DOF, its largest so far, and the DOF's peak.
@@ -255,10 +231,8 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
     return static_cast<std::int64_t>(std::floor(1000.0 * std::min(1.0, (st.time() - t_start) / span)));
   };
   auto finish = [&] {
-    history.resize(row);
-    if (energy) energy->resize(row);
-    if (recorder) recorder->resize(row);
-    res.max_residual = max_residual;
+    obs.resize(obs.row);
+    res.max_residual = obs.max_residual;
     Vector error(n);
     const double floor = n > 0 ? 1e-3 * top.maxCoeff() : 0.0;
     for (Index k = 0; k < n; ++k) {
@@ -436,25 +410,19 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
         trial(3, hh, s);
         if (s == Status::success && nev > 0 && land(3, ta, hh, s)) ++landed;
         if (s == Status::success) {
-          if constexpr (has_accepted_residual<Stepper>::value) {
-            const double r = st.accepted_residual();
-            if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
-          }
-          if (energy) energy->set_dt(hh);
-          if ((energy && !energy->step(st, done + 1, res.failure)) ||
-              (collapse && !collapse->step(st, done + 1, res.failure)))
-            s = res.failure.status;
+          if (obs.energy) obs.energy->set_dt(hh);
+          if (!obs.accepted(st, done + 1, res.failure)) s = res.failure.status;
         }
         if (s != Status::success) break;
         ++done;
-        if (peaks) peaks->update(st);
+        if (obs.peaks) obs.peaks->update(st);
         if (done % opt.save_every == 0 || !(st.time() < t_end)) save();
       }
       if (s != Status::success) {  // the answer failed (or collapsed): the stepper holds its state
         res.status = s;
-        if (s == Status::collapsed) {
+        if (s == Status::collapsed) {  // the state it collapsed in (save() grows the history if need be)
           save();
-          if (peaks) peaks->update(st);
+          if (obs.peaks) obs.peaks->update(st);
         }
         answer_loaded = true;
         break;
@@ -480,7 +448,7 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
     if (!answer_loaded) st.rollback(1);
     answer_loaded = true;
     // The history ends with the last accepted state.
-    if (res.status == Status::success && (row == 0 || res.t[row - 1] != st.time())) save();
+    if (res.status == Status::success && (obs.row == 0 || res.t[obs.row - 1] != st.time())) save();
   }
 #if defined(__GLIBCXX__)
   catch (abi::__forced_unwind&) {
@@ -495,10 +463,10 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
     res.failure = Failure{};
     res.failure.status = Status::interrupted;
     res.failure.step = done + 1;
-    res.failure.t = row > 0 ? res.t[row - 1] : st.time();
+    res.failure.t = obs.row > 0 ? res.t[obs.row - 1] : st.time();
     res.failure.message = "interrupted after step " + std::to_string(done) + " at t = " + detail::fmt(st.time()) +
                           "; the history is saved up to t = " +
-                          (row > 0 ? detail::fmt(res.t[row - 1]) : std::string("the start"));
+                          (obs.row > 0 ? detail::fmt(res.t[obs.row - 1]) : std::string("the start"));
     throw PartialRun{std::move(res), std::current_exception()};
   }
   observe(progress(), 1000);

@@ -208,6 +208,75 @@ double divergence_bound(const SolveOptions& opt, const Stepper& st, double durat
         "and the static displacement of its loads)";
   return default_max_displacement(st.u(), st.v(), duration, load_scale);
 }
+// The observers of a run's accepted steps that the fixed-step and the adaptive loops share: the saved
+// history, the energy account, the recorded effects, the collapse watch, the peaks and the largest
+// accepted residual. `row` counts the saved states.
+template <class Model>
+struct RunObservers {
+  RunObservers(Result& res, Model& model, const effects::EffectSet* set, const SolveOptions& opt, Index n,
+               std::int64_t rows, double energy_limit, double dt)
+      : history(res, opt, n, rows) {
+    if (opt.energy) energy.emplace(res, model, rows, energy_limit, dt, opt.peaks);
+    if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, rows);
+    if (set != nullptr && opt.stop_at_collapse) {
+      collapse.emplace(*set, opt.collapse_deformation);
+      if (!collapse->active()) collapse.reset();
+    }
+    if (opt.peaks) peaks.emplace(res, opt, n);
+  }
+  // The limit on the saved history's bytes, and the bytes of one saved state.
+  static double memory_limit(const SolveOptions& opt) {
+    return std::isnan(opt.max_history_bytes) ? 0.5 * available_memory_bytes() : opt.max_history_bytes;
+  }
+  static double row_bytes(const SolveOptions& opt, const effects::EffectSet* set, Index m) {
+    return history_bytes(1, m, opt.energy) +
+           (opt.record.empty() ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record));
+  }
+
+  template <class Stepper>
+  void start(const Stepper& st) {
+    if (energy) energy->start(st);
+    save(st);
+    if (peaks) peaks->update(st);
+  }
+  template <class Stepper>
+  void save(const Stepper& st) {
+    history.save(st, row);
+    if (energy) energy->save(st, row);
+    if (recorder) recorder->save(st, row);
+    ++row;
+  }
+  void resize(std::int64_t rows) {
+    history.resize(rows);
+    if (energy) energy->resize(rows);
+    if (recorder) recorder->resize(rows);
+  }
+  // After accepted step i: its residual, and the energy balance and collapse checks; false (with failure
+  // set) when one of them stops the run.
+  template <class Stepper>
+  bool accepted(const Stepper& st, std::int64_t i, Failure& failure) {
+    if constexpr (has_accepted_residual<Stepper>::value) {
+      const double r = st.accepted_residual();
+      if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
+    }
+    return !((energy && !energy->step(st, i, failure)) || (collapse && !collapse->step(st, i, failure)));
+  }
+  // The run stopped at a collapse: the state it collapsed in.
+  template <class Stepper>
+  void collapsed(const Stepper& st) {
+    save(st);
+    if (peaks) peaks->update(st);
+  }
+
+  observe::SavedHistory history;
+  std::optional<observe::EnergyAccount<Model>> energy;
+  std::optional<observe::EffectRecorder> recorder;
+  std::optional<observe::CollapseWatch> collapse;
+  std::optional<observe::PeakTracker> peaks;
+  Index row = 0;
+  double max_residual = std::numeric_limits<double>::quiet_NaN();
+};
+
 }  // namespace detail
 
 template <class Stepper, class Observer>
@@ -239,7 +308,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     const Index m = opt.dofs.empty() ? n : static_cast<Index>(opt.dofs.size());
     const double recorded = opt.record.empty() ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record);
     const double bytes = history_bytes(nsave, m, opt.energy) + static_cast<double>(nsave) * recorded;
-    const double limit = std::isnan(opt.max_history_bytes) ? 0.5 * available_memory_bytes() : opt.max_history_bytes;
+    const double limit = detail::RunObservers<std::decay_t<decltype(model)>>::memory_limit(opt);
     NVIB_CHECK(limit <= 0.0 || bytes <= limit, "save_every, dofs",
                "the saved history would need " + detail::fmt(bytes / 1e9) + " GB (" + std::to_string(nsave) +
                    " states of " + std::to_string(m) + " DOFs: t, u, v, a" + (opt.energy ? ", energy" : "") +
@@ -255,18 +324,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   res.num_steps_requested = nsteps;
   // The observers of the accepted steps.
   using Model = std::decay_t<decltype(model)>;
-  observe::SavedHistory history(res, opt, n, nsave);
-  std::optional<observe::EnergyAccount<Model>> energy;
-  if (opt.energy) energy.emplace(res, model, nsave, energy_limit, st.dt(), opt.peaks);
-  std::optional<observe::EffectRecorder> recorder;
-  if (!opt.record.empty()) recorder.emplace(res, *set, opt.record, nsave);
-  std::optional<observe::CollapseWatch> collapse;
-  if (set != nullptr && opt.stop_at_collapse) {
-    collapse.emplace(*set, opt.collapse_deformation);
-    if (!collapse->active()) collapse.reset();
-  }
-  std::optional<observe::PeakTracker> peaks;
-  if (opt.peaks) peaks.emplace(res, opt, n);
+  detail::RunObservers<Model> obs(res, model, set, opt, n, nsave, energy_limit, st.dt());
   std::optional<observe::ErrorEstimate<Model>> estimate;
   if constexpr (has_scheme<Stepper>::value) {
     if (opt.error_estimate) {
@@ -278,33 +336,19 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       }
     }
   }
-  Index row = 0;
-  auto save = [&] {
-    history.save(st, row);
-    if (energy) energy->save(st, row);
-    if (recorder) recorder->save(st, row);
-    ++row;
-  };
-  if (energy) energy->start(st);
-  save();
-  if (peaks) peaks->update(st);
+  obs.start(st);
   if (estimate) estimate->start(st);
 
   const Stats before = st.stats();
   std::string why;
   const double bound = detail::divergence_bound(opt, st, t_end - st.time(), load_scale, why);
-  double max_residual = std::numeric_limits<double>::quiet_NaN();
   // Countdowns instead of i % k: an integer division per step costs as much as a small model's force.
   std::int64_t to_save = k, done = 0;
   ClockPoll poll(opt.observe_period);
   // The history up to the last saved state, the counters of this call and the wall time.
   auto finish = [&] {
-    if (row < nsave) {
-      history.resize(row);
-      if (energy) energy->resize(row);
-      if (recorder) recorder->resize(row);
-    }
-    res.max_residual = max_residual;
+    if (obs.row < nsave) obs.resize(obs.row);
+    res.max_residual = obs.max_residual;
     if (estimate) estimate->finish();
     res.stats = st.stats();
     res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
@@ -325,27 +369,17 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       } else {
         res.failure = st.failure();
       }
-      if (s == Status::success) {
-        if constexpr (has_accepted_residual<Stepper>::value) {
-          const double r = st.accepted_residual();
-          if (r > max_residual || (std::isnan(max_residual) && !std::isnan(r))) max_residual = r;
-        }
-        if ((energy && !energy->step(st, i, res.failure)) || (collapse && !collapse->step(st, i, res.failure)))
-          s = res.failure.status;
-      }
+      if (s == Status::success && !obs.accepted(st, i, res.failure)) s = res.failure.status;
       if (s != Status::success) {
         res.status = s;
-        if (s == Status::collapsed) {  // the state it collapsed in
-          save();
-          if (peaks) peaks->update(st);
-        }
+        if (s == Status::collapsed) obs.collapsed(st);  // the state it collapsed in
         break;
       }
       done = i;
-      if (peaks) peaks->update(st);
+      if (obs.peaks) obs.peaks->update(st);
       if (estimate) estimate->step(st, i);
       if (saving) {
-        save();
+        obs.save(st);
         to_save = k;
       }
       if (poll.tick()) {
@@ -366,10 +400,10 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     res.failure = Failure{};
     res.failure.status = Status::interrupted;
     res.failure.step = done + 1;  // the step under way (a step the interrupt hook stopped after is complete)
-    res.failure.t = row > 0 ? res.t[row - 1] : st.time();
+    res.failure.t = obs.row > 0 ? res.t[obs.row - 1] : st.time();
     res.failure.message = "interrupted after step " + std::to_string(done) + " of " + std::to_string(nsteps) +
                           "; the history is saved up to t = " +
-                          (row > 0 ? detail::fmt(res.t[row - 1]) : std::string("the start"));
+                          (obs.row > 0 ? detail::fmt(res.t[obs.row - 1]) : std::string("the start"));
     throw PartialRun{std::move(res), std::current_exception()};
   }
   observe(done, nsteps);  // once at the end too, however short the run
