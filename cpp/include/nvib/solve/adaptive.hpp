@@ -399,14 +399,12 @@ Result adaptive_attempt(Stepper& st, double t_end, const SolveOptions& opt, doub
         if (left <= tiny_time * std::max(1.0, std::abs(t_next))) break;
         double hh = left < 2.0 * half_h ? (left <= half_h ? left : 0.5 * left) : half_h;  // no sliver at the end
         if (std::abs(hh - half_h) <= 1e-9 * half_h) hh = half_h;  // the companion's end, up to round-off
-        if (nev > 0) {
+        if (nev > 0) {  // without events a failed step fails the run: there is nothing to retake
           st.checkpoint(3);
-          fresh = true;
           set->get_state(committed0.data());
           event_values(g0);
-        } else {
-          fresh = true;  // a failed step fails the run: nothing to retake
         }
+        fresh = true;
         trial(3, hh, s);
         if (s == Status::success && nev > 0 && land(3, ta, hh, s)) ++landed;
         if (s == Status::success) {
