@@ -80,14 +80,16 @@ class _Warn(typing.NamedTuple):
 class ErrorEstimate:
     """The error a run estimates for itself, from its accepted steps (``Result.error_estimate``).
 
-    per_dof : every DOF's estimated max |u_i - u_i,exact| / max |u_i| (NaN where the scheme's error
-    is not seen by the estimate: PreciseIntegration, exact on linear modes). max, dof : the largest and
+    per_dof : every DOF's estimated max |u_i - u_i,exact| / max |u_i| (NaN where a scheme has no
+    estimate). max, dof : the largest and
     the DOF's name. dt, order : the run's step and the scheme's global order, so that ``dt_for(target)``
     = dt (target / max)^(1/order) is the step that would meet target.
 
     The estimate is the leading phase error of the scheme on each mode, c h^2 tau |da/dt|, with c the
     scheme's error constant (its principal eigenvalue against exp(i w h)) and tau the age of the motion
-    (its damping, viscous and hysteretic, forgets): see ``cpp/include/nvib/solve/error_estimate.hpp``.
+    (its damping, viscous and hysteretic, forgets); for PreciseIntegration, exact on linear modes, each
+    step's interpolation error of the nonlinear remainder propagated by its exponential: see
+    ``cpp/include/nvib/solve/error_estimate.hpp``.
     Measured against closed forms and DOP853 in ``benchmarks/results/error_estimate.md``.
 
     An adaptive run's (``tol`` set) is measured instead: the difference between the run and a companion

@@ -119,11 +119,33 @@ def test_the_estimate_can_be_switched_off_and_travels_with_the_result():
     np.testing.assert_array_equal(off.u, res.u)
 
 
-def test_the_precise_integration_method_says_it_has_no_estimate():
-    model = nvib.load_scene("building")
-    est = nvib.solve(model, nvib.PreciseIntegration(), dt=7e-4, t_end=0.1).error_estimate
-    assert not est.available and math.isnan(est.max) and est.dof is None
-    assert math.isnan(est.dt_for(1e-3))
+# PIM follows its own error: each step's interpolation error of the remainder, propagated by its
+# exponential (error_estimate.hpp). Measured estimate / true (benchmarks/results/error_estimate.md):
+#   building 0.39, pendulum_ic2 0.73 at dt/2; the vehicle at the scene's step (true 94 %) warns.
+@pytest.mark.parametrize("scene, dt, low, high", [("building", 7e-4, 1 / 3, 3), ("pendulum_ic2", 0.15, 1 / 3, 3)])
+def test_the_precise_integration_methods_own_estimate(scene, dt, low, high):
+    model = nvib.load_scene(scene)
+    t_end = model.scene["t_end"]
+    res = nvib.solve(model, nvib.PreciseIntegration(), dt=dt, t_end=t_end)
+    true = _true_error(res, reference(model, t_end))
+    assert low <= res.error_estimate.max / true <= high, (res.error_estimate.max, true)
+
+
+def test_the_precise_integration_method_warns_on_the_vehicle():
+    model = nvib.load_scene("vehicle")
+    res = nvib.solve(model, nvib.PreciseIntegration(), dt=model.scene["dt"], t_end=model.scene["t_end"])
+    assert res.error_estimate.max > 0.1 and [w for w in res.warnings if "estimated error" in w]
+
+
+def test_the_precise_integration_method_misses_a_hardening_phase_drift_by_a_measured_factor():
+    # A measured pin of a known limit, not a theorem: the propagation is the linear part's at rest, so
+    # the phase drift of the hardening oscillator's amplitude-dependent frequency escapes it. Over 0.3 s
+    # the estimate is 0.46 of the true error at dt = 5e-4 s; over 1 s the true error has grown tenfold
+    # (2.9e-3) and the estimate has not (1.4e-4): measured 0.048.
+    model = nvib.load_scene("hardening")
+    res = nvib.solve(model, nvib.PreciseIntegration(), dt=5e-4, t_end=1.0)
+    ratio = res.error_estimate.max / _true_error(res, reference(model, 1.0))
+    assert 0.04 <= ratio <= 0.06, ratio
 
 
 def test_solve_many_reports_every_runs_estimate():
@@ -134,5 +156,6 @@ def test_solve_many_reports_every_runs_estimate():
                  for s in (1.0, 3.0)]
         np.testing.assert_array_equal(batch.error_estimates, [r.error_estimate.max for r in alone])
         assert f"largest error estimate {max(r.error_estimate.max for r in alone):.2g}" in repr(batch)
-    pim = nvib.solve_many(model, nvib.PreciseIntegration(), dt=7e-4, t_end=0.1, scales=[1.0], keep="peaks")
-    assert np.isnan(pim.error_estimates).all() and pim[0].error_estimate is None
+    pim = nvib.solve_many(model, nvib.PreciseIntegration(), dt=7e-4, t_end=0.1, scales=[1.0, 2.0], keep="peaks")
+    alone = nvib.solve(model, nvib.PreciseIntegration(), dt=7e-4, t_end=0.1)
+    assert pim.error_estimates[0] == alone.error_estimate.max and pim[0].error_estimate == alone.error_estimate.max

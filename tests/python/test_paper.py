@@ -78,16 +78,20 @@ def test_tables_have_the_expected_rows(out):
     assert all(r["status"] == "success" for r in runs)
     for r in runs:  # every run is measured against its reference, and timed
         assert math.isfinite(float(r["max_error"])) and float(r["wall_time"]) > 0
-        # and reports its own estimate (PIM has none)
-        est = float(r["error_estimate"] or "nan")  # NaN is written as an empty cell
-        assert math.isnan(est) if r["scheme"].startswith("PIM") else est > 0, r["scheme"]
+        # and reports its own estimate
+        assert float(r["error_estimate"] or "nan") > 0, r["scheme"]  # NaN is written as an empty cell
     # A run more than 10 % off estimates itself above 1 % (it warns), except the formats that do not iterate
     # to equilibrium (incremental, one_iteration), whose drift the phase estimate does not see: known misses
     # of issue 21's item 2, measured on the pendulum of IC1 (Newmark incremental estimated 0.61 %; Newmark
     # one_iteration) and the hardening oscillator (Newmark and GαM incremental)
     missed = [(r["case"], r["scheme"]) for r in runs if float(r["max_error"]) > 0.1
-              and not r["scheme"].startswith("PIM") and not float(r["error_estimate"] or "nan") > 0.01]
-    assert all("incremental" in scheme or "one_iteration" in scheme for _, scheme in missed), missed
+              and not float(r["error_estimate"] or "nan") > 0.01]
+    # PIM's estimate propagates its errors with the linear part at rest, so the phase drift of the pendulum's
+    # amplitude-dependent period over its long runs escapes it (error_estimate.hpp): known misses too,
+    # measured on fig03b (2000 s), fig10 (1800 s) and fig11 (dt 0.8 s)
+    pim_drift = {"fig03b_pendulum_ic2_2000s", "fig10_pendulum_ic1_1800s", "fig11_pendulum_ic1_dt0.8"}
+    assert all("incremental" in scheme or "one_iteration" in scheme or (scheme == "PIM" and case in pim_drift)
+               for case, scheme in missed), missed
     t1 = _rows(out, "table1.csv")
     assert sorted({float(r["dt"]) for r in t1}) == pytest.approx(sorted(paper.cases.TABLE1_DTS))
     for dt in paper.cases.TABLE1_DTS:

@@ -399,7 +399,7 @@ def print_summary(res, model, scheme, dof, dt, t_end, save_every, elapsed, args)
             "estimated from the steps"
         lines.append(("error estimate", f"{est.max:.2g} of the peak of {est.dof} (max |u - u_exact| / max |u|, "
                                         f"{how})" if est.available else
-                      "not available for this scheme (exact on linear modes; nvib cost measures its error)"))
+                      "not available for this scheme (nvib cost measures its error)"))
     if res.energy is not None:
         rel = res.energy.relative_balance_error()
         lines.append(("energy", f"relative balance error {rel:.3e} (max |K + P + D + H - W - E0| / max energy)"

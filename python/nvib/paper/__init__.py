@@ -149,7 +149,7 @@ def _overview_md(runs: list[dict]) -> str:
 
     return ("**max error** (displacement of the figure's DOF, relative)\n\n" +
             _md(head, body(lambda r: _fmt(r["max_error"]))) +
-            "\n\n**estimated error** (the run's own Result.error_estimate, worst DOF; PIM has none)\n\n" +
+            "\n\n**estimated error** (the run's own Result.error_estimate, worst DOF)\n\n" +
             _md(head, body(lambda r: _fmt(r["error_estimate"]))) +
             "\n\n**energy error** (max |E - E0| / E0; building and vehicle: energy balance error)\n\n" +
             _md(head, body(lambda r: _fmt(r["energy_error"]))) +

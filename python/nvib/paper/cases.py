@@ -193,7 +193,7 @@ def measure(s: Setting, scheme, *, repeats: int = 3, case: str = "", claim: str 
         ur, vr = s.ref(res.t)
         out["state_error"] = float(np.max(np.hypot((u - ur[:, s.col]) / s.orbit.scale[0],
                                                    (v - vr[:, s.col]) / s.orbit.scale[1])))
-    est = res.error_estimate  # the run's own estimate (all DOFs; NaN for PIM), beside the measured error
+    est = res.error_estimate  # the run's own estimate (all DOFs), beside the measured error
     out["error_estimate"] = est.max if est is not None else math.nan
     out["max_abs_u"] = float(np.max(np.abs(u)))
     if _is_pendulum(s.model):

@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <string>
+#include <vector>
 
 #include "../linalg/expm.hpp"
 #include "scheme.hpp"
@@ -168,12 +169,61 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
       if (q > 1) z_.tail(n * (q - 1)) = Eigen::Map<const Vector>(R_.data(), n * (q - 1));
       x_.noalias() = cache_[active_].corr[static_cast<size_t>(mc - 1)] * z_;
     }
+    // The first steps' corrector used r at a predicted state of a lower order: its error is accounted
+    // for (account_startup) with the final r.
+    const bool startup = track_ && p_.corrections > 0 && nhist_ < q;
+    if (startup) r_tilde_ = rnew_;
     evaluate(t1);
+    if (startup) account_startup(std::min<Index>(q, nhist_ + 1));
+    if (track_) account_error(p_.corrections > 0 ? std::min<Index>(q, nhist_ + 1) : std::min<Index>(q, nhist_));
     // Shift the history (newest first).
     for (Index j = q - 1; j > 0; --j) R_.col(j) = R_.col(j - 1);
     R_.col(0) = rnew_;
     nhist_ = std::min<Index>(q, nhist_ + 1);
     return this->advance();
+  }
+
+  // The run's own error estimate (error_estimate.hpp, "The precise integration method"): on, the
+  // stepper follows e = x - x_exact, the local error of each step's interpolation of the remainder
+  // propagated by the exponential; error_u() is its displacement half, updated every kErrorBlock steps
+  // (error_updates() counts the updates). Off by default; switching it on starts e at 0.
+  static constexpr int kErrorBlock = 8;
+  void track_error(bool on) {
+    track_ = on;
+    if (!on) return;
+    const Index n = this->size();
+    // C(m) (-1)^i binom(m, i): the weights of the newest m + 1 remainders in C(m) D^m r.
+    for (Index m = 1; m <= p_.interpolation + 1; ++m) {
+      auto& w = difference_weights_[static_cast<size_t>(m - 1)];
+      const double c = error_constant_of(m, p_.corrections > 0);
+      double binom = 1.0;
+      for (Index i = 0; i <= m; ++i) {
+        w[static_cast<size_t>(i)] = (i % 2 == 0 ? c : -c) * binom;
+        binom = binom * static_cast<double>(m - i) / static_cast<double>(i + 1);
+      }
+    }
+    err_.setZero(2 * n);
+    r_tilde_.setZero(n);
+    dsum_.setZero(n);
+    dabs_.setZero(n);
+    dtmp_.setZero(n);
+    known_ = nhist_;
+    pending_ = 0;
+    block_ = 0;
+    updates_ = 0;
+  }
+  auto error_u() const { return err_.head(this->size()); }
+  std::int64_t error_updates() const { return updates_; }
+  // The steps of a block not yet propagated, added where they are (at the end of a run).
+  void flush_error() {
+    if (!track_ || block_ == 0) return;
+    const Index n = this->size(), N = 2 * n;
+    block_mean();
+    err_.noalias() += static_cast<double>(block_) * cache_[active_].pred[0].block(0, N, N, n) * dtmp_;
+    dsum_.setZero();
+    dabs_.setZero();
+    block_ = 0;
+    ++updates_;
   }
 
   const PreciseIntegration& scheme() const { return p_; }
@@ -191,6 +241,8 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     x_.head(n) = u_;
     x_.tail(n) = v_;
     nhist_ = R_.cols();
+    known_ = nhist_;
+    pending_ = 0;
   }
   const Matrix& transition() const { return cache_[active_].T; }
 
@@ -230,6 +282,8 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     Base::rollback(slot);
     R_ = ck_R_[static_cast<size_t>(slot)];
     nhist_ = ck_nhist_[static_cast<size_t>(slot)];
+    known_ = nhist_;
+    pending_ = 0;
     x_.head(this->size()) = u_;
     x_.tail(this->size()) = v_;
     if (h_ != h) use_propagators();
@@ -242,6 +296,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     double h = 0.0;
     Matrix T;
     std::vector<Matrix> pred, corr;
+    Matrix Tb, S;  // with the error estimate: T^kErrorBlock and sum_{j < kErrorBlock} T^j W0
   };
   // T = e^{hH} and the moment integrals W_k = k! h^{-k} int_0^h e^{H(h-s)} s^k ds
   // (velocity columns: r has a zero top half), folded with the interpolation
@@ -314,6 +369,97 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     return out;
   }
 
+  // The local error of the step just taken, whose interpolation used `used` points: r - p, the remainder
+  // minus its interpolating polynomial, is r^(m) h^m / m! prod (s/h - node) to leading order, and its
+  // integral against e^{H(h-s)} is about W0 C(m) D^m r, W0 = int_0^h e^{H(h-s)} ds [0; I] and D^m r
+  // the m-th backward difference of the remainders (C(m): error_constant_of below). A step whose
+  // difference needs a remainder not yet known (the first steps) is accounted one step later.
+  void account_error(Index used) {
+    const Index q = p_.interpolation + 1;
+    known_ = std::min<Index>(q + 1, known_ + 1);
+    if (pending_ > 0 && pending_ + 1 <= known_) {
+      add_difference(pending_);
+      pending_ = 0;
+    }
+    if (used + 1 <= known_) {
+      add_difference(used);
+    } else {
+      pending_ = used;
+    }
+    if (++block_ < kErrorBlock) return;
+    // A block of steps: e <- T^b e + sum_j T^(b-1-j) W0 d_j, with the d_j of the block replaced by their
+    // mean (S = sum_j T^j W0, built once per step length).
+    Propagators& P = cache_[active_];
+    if (P.Tb.size() == 0) error_propagators(P);
+    block_mean();
+    err_ = P.Tb * err_;
+    err_.noalias() += P.S * dtmp_;
+    dsum_.setZero();
+    dabs_.setZero();
+    block_ = 0;
+    ++updates_;
+  }
+  // The block's local errors as one mean (into dtmp_): their sum's sign, the sum of their sizes. Near a
+  // kink of r (a yield point, a contact, a record's sample) the differences D^m r of successive steps
+  // alternate and their sum telescopes, while the errors they stand for do not cancel; where r is smooth
+  // the two sums agree.
+  void block_mean() {
+    const double inv = 1.0 / static_cast<double>(block_);
+    for (Index i = 0; i < dtmp_.size(); ++i) dtmp_[i] = (dsum_[i] < 0.0 ? -dabs_[i] : dabs_[i]) * inv;
+  }
+  // A step whose predictor had fewer points than its corrector (the first steps): the corrector's r at
+  // the new time was r~, at a state of the predictor's lower order, where the answer's r is rnew_; the
+  // answer is off by the corrector's weight of that point times their difference.
+  void account_startup(Index mc) {
+    const Index n = this->size(), N = 2 * n;
+    dtmp_ = r_tilde_ - rnew_;
+    err_.noalias() += cache_[active_].corr[static_cast<size_t>(mc - 1)].block(0, N, N, n) * dtmp_;
+  }
+  // dsum_ -= C(m) D^m r and dabs_ += |C(m) D^m r|, D^m r over the newest m + 1 remainders (rnew_, then
+  // R_'s columns, before the history shifts): one pass over them.
+  void add_difference(Index m) {
+    const Index n = this->size();
+    std::array<const double*, kMaxPoints + 1> col{};
+    for (Index i = 0; i <= m; ++i) col[static_cast<size_t>(i)] = i == 0 ? rnew_.data() : R_.col(i - 1).data();
+    const std::array<double, kMaxPoints + 1>& w = difference_weights_[static_cast<size_t>(m - 1)];
+    double *sum = dsum_.data(), *abs = dabs_.data();
+    for (Index k = 0; k < n; ++k) {
+      double d = 0.0;
+      for (Index i = 0; i <= m; ++i) d += w[static_cast<size_t>(i)] * col[static_cast<size_t>(i)][k];
+      sum[k] -= d;
+      abs[k] += std::abs(d);
+    }
+  }
+  // C(m) = int_0^1 prod_k (s - node_k) ds / m!, the nodes of the interpolation with m points: 1, 0, -1,
+  // .. for the corrector, 0, -1, .. for the predictor (m = 3: -1/24 and 3/8, Adams' constants).
+  static double error_constant_of(Index m, bool corrector) {
+    std::vector<double> poly{1.0};  // coefficients of prod (s - node), lowest degree first
+    for (Index k = 0; k < m; ++k) {
+      const double node = corrector ? 1.0 - static_cast<double>(k) : -static_cast<double>(k);
+      std::vector<double> next(poly.size() + 1, 0.0);
+      for (std::size_t i = 0; i < poly.size(); ++i) {
+        next[i + 1] += poly[i];
+        next[i] -= node * poly[i];
+      }
+      poly = std::move(next);
+    }
+    double integral = 0.0, fact = 1.0;
+    for (std::size_t i = 0; i < poly.size(); ++i) integral += poly[i] / static_cast<double>(i + 1);
+    for (Index k = 2; k <= m; ++k) fact *= static_cast<double>(k);
+    return integral / fact;
+  }
+  void error_propagators(Propagators& P) {
+    const Index n = this->size(), N = 2 * n;
+    const auto W0 = P.pred[0].block(0, N, N, n);
+    P.S = W0;
+    Matrix power = P.T;
+    for (int j = 1; j < kErrorBlock; ++j) {
+      P.S.noalias() += power * W0;
+      if (j + 1 < kErrorBlock) power = power * P.T;
+    }
+    P.Tb = power * P.T;
+  }
+
   // Evaluates the force at x_ (time t1): sets u_, v_, a_ and the remainder rnew_.
   void evaluate(double t1) {
     const Index n = this->size();
@@ -342,6 +488,15 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   std::array<Matrix, Base::kCheckpoints> ck_R_;
   Index nhist_ = 0;
   std::array<Index, Base::kCheckpoints> ck_nhist_{};
+  // The error estimate (track_error): e, the block's sum of -C(m) D^m r and of its sizes, r~ of the first
+  // steps.
+  bool track_ = false;
+  Vector err_, dsum_, dabs_, dtmp_, r_tilde_;
+  static constexpr std::size_t kMaxPoints = 4;  // interpolation + 1 <= 4
+  std::array<std::array<double, kMaxPoints + 1>, kMaxPoints> difference_weights_{};
+  Index known_ = 0, pending_ = 0;
+  int block_ = 0;
+  std::int64_t updates_ = 0;
 };
 
 }  // namespace nvib

@@ -112,8 +112,8 @@ struct Result {
   // With SolveOptions::peaks and energy: the relative energy balance error over every step (NaN otherwise).
   double peak_energy_error = std::numeric_limits<double>::quiet_NaN();
   // With SolveOptions::error_estimate: every DOF's estimated max |u_i - u_i,exact| / max |u_i| (see
-  // error_estimate.hpp); NaN entries for a scheme exact on linear modes, whose error it cannot see;
-  // empty when not asked for or the stepper does not name its scheme.
+  // error_estimate.hpp); empty when not asked for or the stepper neither names its scheme nor follows
+  // its own error.
   Vector error_estimate;
 };
 

@@ -326,7 +326,10 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   using Model = std::decay_t<decltype(model)>;
   detail::RunObservers<Model> obs(res, model, set, opt, n, nsave, energy_limit, st.dt());
   std::optional<observe::ErrorEstimate<Model>> estimate;
-  if constexpr (has_scheme<Stepper>::value) {
+  std::optional<observe::OwnErrorEstimate> own_estimate;
+  if constexpr (observe::tracks_own_error<Stepper>::value) {
+    if (opt.error_estimate) own_estimate.emplace(res, n);
+  } else if constexpr (has_scheme<Stepper>::value) {
     if (opt.error_estimate) {
       const ErrorConstants& c = cached_error_constants(st.scheme());
       if (c.available) {
@@ -338,6 +341,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   }
   obs.start(st);
   if (estimate) estimate->start(st);
+  if (own_estimate) own_estimate->start(st);
 
   const Stats before = st.stats();
   std::string why;
@@ -350,6 +354,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
     if (obs.row < nsave) obs.resize(obs.row);
     res.max_residual = obs.max_residual;
     if (estimate) estimate->finish();
+    if (own_estimate) own_estimate->finish(st);
     res.stats = st.stats();
     res.stats -= before;  // counters of this call only (the stepper's own are cumulative)
     res.stats.wall_time = std::chrono::duration<double>(clock::now() - start).count();
@@ -378,6 +383,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
       done = i;
       if (obs.peaks) obs.peaks->update(st);
       if (estimate) estimate->step(st, i);
+      if (own_estimate) own_estimate->step(st, i);
       if (saving) {
         obs.save(st);
         to_save = k;
