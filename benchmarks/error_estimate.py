@@ -96,7 +96,8 @@ def verdict(r: dict) -> str:
 
 
 def overhead(repeats: int) -> list[dict]:
-    cases = [("building", nvib.load_scene("building"), [nvib.CentralDifference(), nvib.Newmark()], 7e-4, 10.0)]
+    cases = [("building", nvib.load_scene("building"), [nvib.CentralDifference(), nvib.Newmark(), nvib.PreciseIntegration()],
+              7e-4, 10.0)]
     from scipy import sparse
 
     n = 100_000

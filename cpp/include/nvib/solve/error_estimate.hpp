@@ -38,11 +38,11 @@
 // r at the predicted and at the final state.
 // The propagation is the linear part's (the tangent at rest): the phase drift of a strongly nonlinear
 // motion's amplitude-dependent frequency is not in it. Measured (benchmarks/results/error_estimate.md):
-// within a factor 3 on the building and the pendulum of small amplitude, 3-8x over on the inelastic
-// building (its bilinear kinks), and under by 20-50x on the pendulum near the top and on the hardening
-// oscillator over more than a few periods; the vehicle's runs, 10-95 % off, warn. It costs about 15 % of a
-// PIM run on the six-storey building, whose steps are short (0.2 us), and O(n) + O(n^2) / 8 per step
-// against PIM's O(n^2).
+// within a factor 3 on the building, the pendulum of small amplitude and the hardening oscillator over
+// 0.3 s, 3-5x over on the inelastic building (its bilinear kinks), 0.02-0.06 of the truth on the pendulum
+// near the top (0.05 on the hardening oscillator over 1 s); the vehicle's runs, 10-95 % off, warn. It
+// costs 12 % of a PIM run on the six-storey building, whose steps are short (0.2 us), and O(n) + O(n^2) / 8
+// per step against PIM's O(n^2).
 //
 // What it is not: an estimate of the error of an effect event (a contact opening, a yield point)
 // beyond what the smooth formula sees, nor of an unconverged Newton step (Result::max_residual says
