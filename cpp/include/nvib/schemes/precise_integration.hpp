@@ -207,7 +207,6 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     dsum_.setZero(n);
     dabs_.setZero(n);
     dtmp_.setZero(n);
-    known_ = nhist_;
     pending_ = 0;
     block_ = 0;
     updates_ = 0;
@@ -220,10 +219,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     const Index n = this->size(), N = 2 * n;
     block_mean();
     err_.noalias() += static_cast<double>(block_) * cache_[active_].pred[0].block(0, N, N, n) * dtmp_;
-    dsum_.setZero();
-    dabs_.setZero();
-    block_ = 0;
-    ++updates_;
+    end_block();
   }
 
   const PreciseIntegration& scheme() const { return p_; }
@@ -241,7 +237,6 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     x_.head(n) = u_;
     x_.tail(n) = v_;
     nhist_ = R_.cols();
-    known_ = nhist_;
     pending_ = 0;
   }
   const Matrix& transition() const { return cache_[active_].T; }
@@ -282,7 +277,6 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     Base::rollback(slot);
     R_ = ck_R_[static_cast<size_t>(slot)];
     nhist_ = ck_nhist_[static_cast<size_t>(slot)];
-    known_ = nhist_;
     pending_ = 0;
     x_.head(this->size()) = u_;
     x_.tail(this->size()) = v_;
@@ -375,13 +369,12 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   // the m-th backward difference of the remainders (C(m): error_constant_of below). A step whose
   // difference needs a remainder not yet known (the first steps) is accounted one step later.
   void account_error(Index used) {
-    const Index q = p_.interpolation + 1;
-    known_ = std::min<Index>(q + 1, known_ + 1);
-    if (pending_ > 0 && pending_ + 1 <= known_) {
+    const Index known = nhist_ + 1;  // before the shift: R_'s nhist_ remainders and rnew_
+    if (pending_ > 0 && pending_ + 1 <= known) {
       add_difference(pending_);
       pending_ = 0;
     }
-    if (used + 1 <= known_) {
+    if (used + 1 <= known) {
       add_difference(used);
     } else {
       pending_ = used;
@@ -394,6 +387,9 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
     block_mean();
     err_ = P.Tb * err_;
     err_.noalias() += P.S * dtmp_;
+    end_block();
+  }
+  void end_block() {
     dsum_.setZero();
     dabs_.setZero();
     block_ = 0;
@@ -494,7 +490,7 @@ class PreciseIntegrationStepper : public StepperBase<ModelT> {
   Vector err_, dsum_, dabs_, dtmp_, r_tilde_;
   static constexpr std::size_t kMaxPoints = 4;  // interpolation + 1 <= 4
   std::array<std::array<double, kMaxPoints + 1>, kMaxPoints> difference_weights_{};
-  Index known_ = 0, pending_ = 0;
+  Index pending_ = 0;  // a first step's difference order, accounted one step later
   int block_ = 0;
   std::int64_t updates_ = 0;
 };

@@ -230,7 +230,7 @@ struct RunObservers {
   }
   static double row_bytes(const SolveOptions& opt, const effects::EffectSet* set, Index m) {
     return history_bytes(1, m, opt.energy) +
-           (opt.record.empty() ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record));
+           (opt.record.empty() || set == nullptr ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record));
   }
 
   template <class Stepper>
@@ -306,9 +306,9 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
   const std::int64_t nsave = nsteps / k + 1 + (nsteps % k != 0 ? 1 : 0);
   {
     const Index m = opt.dofs.empty() ? n : static_cast<Index>(opt.dofs.size());
-    const double recorded = opt.record.empty() ? 0.0 : observe::EffectRecorder::bytes_per_state(*set, opt.record);
-    const double bytes = history_bytes(nsave, m, opt.energy) + static_cast<double>(nsave) * recorded;
-    const double limit = detail::RunObservers<std::decay_t<decltype(model)>>::memory_limit(opt);
+    using Observers = detail::RunObservers<std::decay_t<decltype(model)>>;
+    const double bytes = static_cast<double>(nsave) * Observers::row_bytes(opt, set, m);
+    const double limit = Observers::memory_limit(opt);
     NVIB_CHECK(limit <= 0.0 || bytes <= limit, "save_every, dofs",
                "the saved history would need " + detail::fmt(bytes / 1e9) + " GB (" + std::to_string(nsave) +
                    " states of " + std::to_string(m) + " DOFs: t, u, v, a" + (opt.energy ? ", energy" : "") +
