@@ -42,7 +42,8 @@ class RunSummary:
     balance error (with ``energy=True``), the counters and the wall time. ``label`` says what the run was.
     The peaks and the energy error are over every step of the run, whatever ``save_every``.
     ``error_estimate``: the run's estimated error, the largest over its DOFs (``Result.error_estimate``;
-    None when switched off or not available for the scheme); ``warnings``: the run's ``Result.warnings``."""
+    None when switched off or not available for the scheme), and ``error_estimates`` each DOF's (relative
+    to that DOF's peak; None likewise); ``warnings``: the run's ``Result.warnings``."""
 
     label: dict
     status: Status | None
@@ -57,6 +58,7 @@ class RunSummary:
     wall_time: float
     error_estimate: float | None = None
     warnings: list = dataclasses.field(default_factory=list)
+    error_estimates: np.ndarray | None = None
 
     @property
     def success(self) -> bool:
@@ -273,7 +275,7 @@ def _summary(model: Model, res, label: dict, layout=None) -> RunSummary:
     est = res.error_estimate
     return RunSummary(label, res.status, msg, peak_u, measures, float(res.t[-1]), u[-1].copy(), res.v[-1].copy(),
                       err, res.stats, res.stats.wall_time, est.max if est is not None and est.available else None,
-                      list(res.warnings))
+                      list(res.warnings), est.per_dof.copy() if est is not None and est.available else None)
 
 
 def _run_one(model, motion, scale, changes, label, scheme, own, keep, options):

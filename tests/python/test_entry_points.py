@@ -83,7 +83,8 @@ def calls(files) -> dict:
     # an IDA's table as nvib.ida makes it (two records, three scales, one collapse), without the runs
     levels, none = np.array([1.0, 2.0, 3.0]), [""] * 3
     curves = [nvib.analysis.ida.Curve(name, levels, np.array(d), np.isinf(d), [""] * 2 + [cause], levels,
-                                      np.full(3, np.nan), none, none, np.where(np.isinf(d), np.nan, d))
+                                      np.full(3, np.nan), none, none, np.where(np.isinf(d), np.nan, d),
+                                      np.full(3, np.nan))
               for name, d, cause in (("a", [0.01, 0.03, np.inf], "strength lost"), ("b", [0.025, 0.015, 0.04], ""))]
     measure = np.vstack([c.demand for c in curves])
     ida = nvib.IDA(["a", "b"], curves, levels, measure, np.isinf(measure), "peak storey drift", "m",

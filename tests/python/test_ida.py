@@ -37,6 +37,7 @@ def test_stripes_equal_the_runs_and_a_divergence_is_a_named_collapse(tmp_path):
         for j, s in enumerate(levels[:3]):
             h = nvib.solve(two_storeys(gm.scaled(s)), nvib.CentralDifference(), dt=1e-3, t_end=gm.t[-1])
             assert res.measure[i, j] == drift_ratio(h)
+            assert res.curves[i].estimate[j] == h.error_estimate.max  # each run's own estimate, as solve gives it
         c = res.curves[i]
         assert c.collapsed[3] and c.cause[3] == "non-convergence" and "diverged" in c.message[3]
         assert c.capacity == 2.0 and c.collapse_im == 1e7
@@ -110,6 +111,33 @@ def test_each_run_ends_at_its_own_records_end_plus_the_tail():
         assert res.measure[i, 0] == drift_ratio(h)
         until_end = nvib.solve(two_storeys(gm), nvib.CEMDTS(), dt=1e-3, t_end=gm.t[-1])
         assert drift_ratio(until_end) < 0.9 * drift_ratio(h)
+
+
+def test_runs_report_their_estimates_and_those_above_warn_error_are_named(tmp_path, capsys):
+    gm = motions()[0]
+    levels = [0.5, 1.0, 2.0]
+    res = nvib.ida(two_storeys(), [gm], levels, im="scale", storeys=STOREYS, dt=2e-3, tail=0.0, check=False,
+                   progress=False)
+    est = res.curves[0].estimate
+    assert np.all((est > 0) & (est < 1e-2)) and not any("warn_error" in w for w in res.warnings)
+    worst = int(np.argmax(est))
+    line = res.estimate_summary()
+    assert f"worst {est[worst]:.2g} (decay at {levels[worst]:.4g})" in line and "3 of 3 runs estimated" in line
+    assert "worst estimate" in res.markdown() and f"{est.max():.2g} |" in res.markdown()
+    # a threshold between the runs' estimates: only the runs above it are counted, the worst named
+    limit = float(np.sort(est)[0] * 1.0001)
+    low = nvib.ida(two_storeys(), [gm], levels, im="scale", storeys=STOREYS, dt=2e-3, tail=0.0, check=False,
+                   progress=False, warn_error=limit)
+    np.testing.assert_array_equal(low.curves[0].estimate, est)
+    [w] = [w for w in low.warnings if "warn_error" in w]
+    assert w.startswith(f"decay: 2 of 3 runs estimate their error above warn_error = {limit:g} (worst {est[worst]:.2g}")
+    # the estimates travel through the CSV (a file without the column reads back with NaN)
+    res.to_csv(tmp_path / "ida.csv")
+    np.testing.assert_array_equal(read_ida(tmp_path / "ida.csv").curves[0].estimate, est)
+    lines = (tmp_path / "ida.csv").read_text().splitlines()
+    old = [line if line.startswith("#") else line.rsplit(",", 1)[0] for line in lines]
+    (tmp_path / "old.csv").write_text("\n".join(old) + "\n")
+    assert np.all(np.isnan(read_ida(tmp_path / "old.csv").curves[0].estimate))
 
 
 def test_the_checked_error_is_the_change_at_half_the_step():
@@ -212,6 +240,7 @@ def test_the_csv_reads_back_and_the_command_line_runs_ida_and_fragility(tmp_path
                           "--out", str(out), "--plot", str(png), "--no-check", "--no-progress"])
     text = capsys.readouterr().out
     assert code == 0 and "collapse capacity: median" in text and "dynamic instability" in text
+    assert "estimated error of the runs (relative to the peaks): median" in text
     res = read_ida(out)
     assert len(res.curves) == 3 and res.im_unit == "g" and res.measure_unit == "%"
     direct = nvib.ida(nvib.load_scene("building_collapse"), [nvib.GroundMotion.from_file(f, dt=0.01, units="g")

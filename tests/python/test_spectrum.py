@@ -67,6 +67,13 @@ def test_elastic_spectrum_meets_the_requested_accuracy(accuracy):
     np.testing.assert_allclose(sp.PSv, w * sp.Sd, rtol=1e-15)
     np.testing.assert_allclose(sp.PSa, w * w * sp.Sd, rtol=1e-15)
     assert np.all(sp.dt <= gm.dt) and sp.wall_time > 0
+    # each run reports its estimate: that of the same run made by solve; an estimate of the history's error
+    # (phase included) bounds the error of its peak (at most the largest error over the history), so it may
+    # not understate it by more than its own factor of trust, 3 (measured: 1.4 to 350 times the peak's error)
+    k = 12
+    h = nvib.solve(nvib.analysis.spectrum._sdof(periods[k], 0.05, gm, None), nvib.Newmark(), dt=sp.dt[k], t_end=t_end)
+    assert sp.estimate[k] == h.error_estimate.max
+    assert np.all(sp.estimate >= sp.error / 3.0)
 
 
 def test_inelastic_spectrum_checks_itself_by_step_halving():
@@ -142,9 +149,17 @@ def test_command_line(tmp_path, capsys):
     lines = out.read_text(encoding="utf-8").splitlines()
     # a plain file says nothing of its unit: the header says the values are the record's
     assert lines[0] == ("damping,period [s],Sd [record units s^2],PSv [record units s],PSa [record units],"
-                        "Sa [record units],error,dt [s]") and len(lines) == 1 + 2 * 3
+                        "Sa [record units],error,dt [s],estimate") and len(lines) == 1 + 2 * 3
     sp = nvib.spectrum(gm, [0.1, 0.5, 2.0], damping=0.05)
     assert float(lines[4].split(",")[2]) == sp.Sd[0]  # the CSV holds the library's numbers
+    # runs of a scheme: the table and the CSV carry each run's estimate beside its checked error
+    assert main(["spectrum", str(path), "--dt", "0.01", "--periods", "0.5,2", "--scheme", "newmark",
+                 "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    ran = nvib.spectrum(gm, [0.5, 2.0], scheme=nvib.Newmark())
+    assert f"the runs' own estimates: largest {ran.estimate.max():.1e}" in text and "estimate" in text
+    rows = out.read_text(encoding="utf-8").splitlines()[1:]
+    assert [float(r.split(",")[-1]) for r in rows] == list(ran.estimate)
     for argv, arg in ((["spectrum", str(path)], "--dt"),
                       (["spectrum", str(path), "--dt", "0.01", "--damping", "-0.1"], "--damping"),
                       (["spectrum", str(path), "--dt", "0.01", "--scheme", "newmark", "--damping", "2"], "--damping")):
@@ -218,8 +233,8 @@ def test_spectra_in_g_carry_their_units(tmp_path, capsys):
     assert "PSa [m/s^2]" in capsys.readouterr().out and (tmp_path / "s.png").stat().st_size > 0
     g = (tmp_path / "g.csv").read_text(encoding="utf-8").splitlines()
     si = (tmp_path / "si.csv").read_text(encoding="utf-8").splitlines()
-    assert g[0] == "damping,period [s],Sd [m],PSv [m/s],PSa [g],Sa [g],error,dt [s]"
-    assert si[0] == "damping,period [s],Sd [m],PSv [m/s],PSa [m/s^2],Sa [m/s^2],error,dt [s]"
+    assert g[0] == "damping,period [s],Sd [m],PSv [m/s],PSa [g],Sa [g],error,dt [s],estimate"
+    assert si[0] == "damping,period [s],Sd [m],PSv [m/s],PSa [m/s^2],Sa [m/s^2],error,dt [s],estimate"
     sp = nvib.spectrum(gm.scaled(2.0), [0.1, 0.5, 2.0])
     row_g, row_si = [float(x) for x in g[2].split(",")], [float(x) for x in si[2].split(",")]
     assert row_g[4] == pytest.approx(sp.PSa[1], rel=1e-12)  # in g, as the record

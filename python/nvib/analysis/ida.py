@@ -20,7 +20,10 @@ A run collapses, and the IDA says by which cause:
   Cornell 2002, section 6).
 Each run goes to its own record's end plus ``tail`` seconds of free vibration. Each run's accuracy is
 checked by making it again at half the step (``check=True``): ``error`` is the relative change of the
-demand, or inf where the verdict (collapse or not) changes with the step.
+demand, or inf where the verdict (collapse or not) changes with the step. Each run also reports its own
+estimate of its error (``estimate``: ``Result.error_estimate``, the largest over the DOFs, relative to each
+DOF's peak), with or without the check; a surviving run whose estimate exceeds ``warn_error`` (1e-2 unless
+given) is named in the warnings.
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ from .._batch import RunError, solve_many
 from .._labels import scheme_label
 from .._model import Model
 from .._records import STANDARD_GRAVITY, GroundMotion
-from .._solve import Status
+from .._solve import ERROR_WARNING, Status
 from .._storeys import declared, max_drift_ratio, storey_heights
 
 __all__ = ["IDA", "Curve", "ida", "intensity", "read_ida", "CAUSES"]
@@ -53,9 +56,10 @@ class Curve:
     inf where the run collapsed), ``collapsed``, ``cause`` ("" or one of CAUSES), ``factor`` (the scale factor
     that brought the record to each level), ``error`` (the relative change of the demand when the step is
     halved; 0 for a collapse found at both steps, inf where the verdict changes, NaN when not checked),
-    ``message`` (why a run failed), ``peak_storey`` (where the demand is, for a drift ratio) and
+    ``message`` (why a run failed), ``peak_storey`` (where the demand is, for a drift ratio),
     ``run_demand`` (the demand each run reached, finite also where a flattening curve counts it as a collapse;
-    NaN where the run failed)."""
+    NaN where the run failed) and ``estimate`` (each run's estimate of its own error, relative to the peaks;
+    NaN where the run has none)."""
 
     record: str
     im: np.ndarray
@@ -67,6 +71,7 @@ class Curve:
     message: list
     peak_storey: list
     run_demand: np.ndarray
+    estimate: np.ndarray
 
     @property
     def capacity(self) -> float:
@@ -174,6 +179,25 @@ class IDA:
         x = float(np.percentile(np.where(np.isinf(self.capacities), big, self.capacities), q))
         return math.inf if x > 1e300 else x
 
+    @property
+    def estimates(self) -> np.ndarray:
+        """Every run's estimate of its own error (the curves' ``estimate``, one after the other)."""
+        return np.concatenate([c.estimate for c in self.curves]) if self.curves else np.zeros(0)
+
+    def estimate_summary(self) -> str:
+        """One line: the runs' estimated errors (median and worst, with the record and level of the worst)."""
+        est = self.estimates
+        if not np.any(np.isfinite(est)):
+            return "estimated error of the runs: none reported"
+        worst, where = -math.inf, ""
+        for c in self.curves:
+            if np.any(np.isfinite(c.estimate)):
+                k = int(np.nanargmax(c.estimate))
+                if c.estimate[k] > worst:
+                    worst, where = float(c.estimate[k]), f"{c.record} at {c.im[k]:.4g}"
+        return (f"estimated error of the runs (relative to the peaks): median {np.nanmedian(est):.2g}, "
+                f"worst {worst:.2g} ({where}), {int(np.sum(np.isfinite(est)))} of {est.size} runs estimated")
+
     def _im_label(self) -> str:
         return f"{self.im_name} [{self.im_unit}]" if self.im_unit else self.im_name
 
@@ -181,16 +205,18 @@ class IDA:
         return f"{self.measure_name} [{self.measure_unit}]" if self.measure_unit else self.measure_name
 
     def markdown(self) -> str:
-        """Two tables: each record's collapse (capacity, cause, runs, worst checked error), then the demand at
-        each level with its fractiles."""
+        """Two tables: each record's collapse (capacity, cause, runs, worst checked error, worst estimated
+        error), then the demand at each level with its fractiles."""
         fmt = lambda x: "collapse" if np.isinf(x) else ("-" if np.isnan(x) else f"{x:.4g}")  # noqa: E731
-        rows = [f"| record | capacity {self._im_label()} | first collapse | cause | runs | worst error |",
-                "|---|---:|---:|---|---:|---:|"]
+        worst = lambda x: np.nanmax(x) if np.any(~np.isnan(x)) else math.nan  # noqa: E731
+        rows = [f"| record | capacity {self._im_label()} | first collapse | cause | runs | worst error | "
+                "worst estimate |", "|---|---:|---:|---|---:|---:|---:|"]
         for c in self.curves:
             cap = "none found" if np.isinf(c.capacity) else f"{c.capacity:.4g}"
-            err = np.nanmax(c.error) if np.any(np.isfinite(c.error) | np.isinf(c.error)) else math.nan
+            err, est = worst(c.error), worst(c.estimate)
             rows.append(f"| {c.record} | {cap} | {'-' if np.isinf(c.collapse_im) else f'{c.collapse_im:.4g}'} | "
-                        f"{c.collapse_cause or '-'} | {c.im.size} | {'-' if np.isnan(err) else f'{err:.2g}'} |")
+                        f"{c.collapse_cause or '-'} | {c.im.size} | {'-' if np.isnan(err) else f'{err:.2g}'} | "
+                        f"{'-' if np.isnan(est) else f'{est:.2g}'} |")
         rows += ["", f"| {self._im_label()} | " + " | ".join(self.records) + " | median | 16 % | 84 % |",
                  "|---:|" + "---:|" * (len(self.records) + 3)]
         for j, x in enumerate(self.levels):
@@ -201,7 +227,7 @@ class IDA:
 
     def to_csv(self, path) -> None:
         """Every run, one row each (record, intensity, demand, collapsed, cause, scale factor, checked error,
-        storey, message), under comment lines that say what the IDA measured; ``read_ida`` reads it back."""
+        storey, message, the run's demand, its estimated error), under comment lines that say what the IDA measured; ``read_ida`` reads it back."""
         import csv
 
         with open(path, "w", newline="", encoding="utf-8") as fh:
@@ -210,12 +236,13 @@ class IDA:
             fh.write(f"# tolerance: {'stripes' if self.tolerance is None else self.tolerance}\n")
             out = csv.writer(fh, quoting=csv.QUOTE_MINIMAL)
             out.writerow(["record", f"im [{self.im_unit}]", f"demand [{self.measure_unit}]", "collapsed", "cause",
-                          "scale factor", "error", "storey", "message", f"run demand [{self.measure_unit}]"])
+                          "scale factor", "error", "storey", "message", f"run demand [{self.measure_unit}]",
+                          "estimate"])
             for c in self.curves:
                 for k in range(c.im.size):
                     out.writerow([c.record, repr(float(c.im[k])), repr(float(c.demand[k])), int(c.collapsed[k]),
                                   c.cause[k], repr(float(c.factor[k])), repr(float(c.error[k])), c.peak_storey[k],
-                                  c.message[k], repr(float(c.run_demand[k]))])
+                                  c.message[k], repr(float(c.run_demand[k])), repr(float(c.estimate[k]))])
 
     def plot(self, path=None, *, ax=None):
         """IDA curves: the intensity against the demand, one curve per record with its runs as dots, each
@@ -507,9 +534,10 @@ def ida(model, records, levels=None, *, im="sa", period: float | None = None, da
     limit = lim["drift_limit"] if measure == "drift_ratio" else math.inf
 
     def run(pairs, step_dt):
-        """[(demand, cause, message, storey)] of the runs (record index, level) at step_dt, in one batch."""
+        """[(demand, cause, message, storey)] of the runs (record index, level) at step_dt, in one batch, and
+        [their estimated errors]."""
         if not pairs:
-            return []
+            return [], []
         motions = []
         for i, x in pairs:
             r = records[i]
@@ -532,35 +560,47 @@ def ida(model, records, levels=None, *, im="sa", period: float | None = None, da
                     out.append((d, "", "", where))
             else:
                 out.append((math.nan, _FAILED.get(run_.status, "non-convergence"), run_.message, ""))
-        return out
+        return out, [math.nan if r.error_estimate is None else r.error_estimate for r in batch]
 
     tracers = [_Record(start, step, 0.5 * step, lim["tolerance"], lim["max_runs"], ceiling, lim["slope_limit"])
                for _ in records]
     runs = 0
-    if levels is not None:
-        pairs = [(i, float(x)) for i in range(len(records)) for x in levels]
-        for (i, x), value in zip(pairs, run(pairs, dt)):
+    estimates = {}  # (record index, level) -> the run's estimated error
+
+    def trace(pairs):
+        values, errors = run(pairs, dt)
+        for (i, x), value, e in zip(pairs, values, errors):
             tracers[i].points[x] = value
-        runs += len(pairs)
+            estimates[(i, x)] = e
+        return len(pairs)
+
+    if levels is not None:
+        runs += trace([(i, float(x)) for i in range(len(records)) for x in levels])
     else:
         while True:
             pairs = [(i, x) for i, t in enumerate(tracers) for x in [t.next_level()] if x is not None]
             if not pairs:
                 break
-            for (i, x), value in zip(pairs, run(pairs, dt)):
-                tracers[i].points[x] = value
-            runs += len(pairs)
+            runs += trace(pairs)
     warnings = [f"{records[i].name or f'record {i}'}: {t.note}" for i, t in enumerate(tracers) if t.note]
     checks = {}
     if check:  # every run again at half the step
         pairs = [(i, x) for i, t in enumerate(tracers) for x in sorted(t.points)]
-        for pair, value in zip(pairs, run(pairs, 0.5 * dt)):
+        for pair, value in zip(pairs, run(pairs, 0.5 * dt)[0]):
             checks[pair] = value
         runs += len(pairs)
     curves = []
     names = [r.name or f"record {k}" for k, r in enumerate(records)]
+    warn_error = options.get("warn_error", ERROR_WARNING)
     for i, t in enumerate(tracers):
         v = t.verdicts()
+        est = np.array([estimates[(i, p[0])] for p in v])
+        above = [k for k, p in enumerate(v) if not p[2] and est[k] > warn_error]
+        if above:
+            k = max(above, key=lambda k: est[k])
+            warnings.append(f"{names[i]}: {len(above)} of {len(v)} runs estimate their error above warn_error = "
+                            f"{warn_error:g} (worst {est[k]:.2g} at {v[k][0]:.4g}): a smaller dt would make them "
+                            f"more accurate")
         err = np.full(len(v), np.nan)
         if check:
             half = _verdicts({x: checks[(i, x)] for x, *_ in v}, lim["slope_limit"])
@@ -574,7 +614,7 @@ def ida(model, records, levels=None, *, im="sa", period: float | None = None, da
         curves.append(Curve(names[i], np.array([p[0] for p in v]), np.array([p[1] for p in v]),
                             np.array([bool(p[2]) for p in v]), [p[2] for p in v],
                             np.array([p[0] / own[i] for p in v]), err, [p[3] for p in v], [p[4] for p in v],
-                            np.array([p[5] for p in v])))
+                            np.array([p[5] for p in v]), est))
     grid = levels if levels is not None else _summary_levels(curves)
     measure_arr = np.vstack([c.demand_at(grid) for c in curves])
     units = {r.units for r in records}
@@ -616,13 +656,13 @@ def read_ida(path) -> IDA:
         for k, row in enumerate(csv.reader(body[1:]), start=2):
             if not row:
                 continue
-            if len(row) != 10:
-                raise ValueError(f"row {k} has {len(row)} fields, expected 10")
+            if len(row) not in (10, 11):  # files written before the estimate column have 10
+                raise ValueError(f"row {k} has {len(row)} fields, expected 11")
             rows.append(row)
             name = row[0]
             c = curves.setdefault(name, [])
             c.append((float(row[1]), float(row[2]), row[3] == "1", row[4], float(row[5]), float(row[6]), row[8],
-                      row[7], float(row[9])))
+                      row[7], float(row[9]), float(row[10]) if len(row) == 11 else math.nan))
     except ValueError as exc:
         raise _checks.value_error("path", f"{path!r}: {exc}") from None
     if not curves:
@@ -632,7 +672,8 @@ def read_ida(path) -> IDA:
         pts.sort(key=lambda p: p[0])
         cols = list(zip(*pts))
         out.append(Curve(name, np.array(cols[0]), np.array(cols[1]), np.array(cols[2], dtype=bool), list(cols[3]),
-                         np.array(cols[4]), np.array(cols[5]), list(cols[6]), list(cols[7]), np.array(cols[8])))
+                         np.array(cols[4]), np.array(cols[5]), list(cols[6]), list(cols[7]), np.array(cols[8]),
+                         np.array(cols[9])))
     stripes = meta["tolerance"] == "stripes"
     grid = np.unique(np.concatenate([c.im for c in out])) if stripes else _summary_levels(out)
     measure = np.vstack([c.demand_at(grid) for c in out])

@@ -110,6 +110,7 @@ def run(args) -> int:
           f"{res.measure_name} [{res.measure_unit}], {res.scheme}, dt = {res.dt:g} s; {res.runs} runs "
           f"(with the half-step checks) in {c.seconds(res.wall_time)}")
     print(res.markdown())
+    print(res.estimate_summary())
     caps = res.capacities
     if caps.size:
         print(f"collapse capacity: median {res.capacity_fractile(50):.4g}, 16 % {res.capacity_fractile(16):.4g}, "

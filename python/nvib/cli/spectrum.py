@@ -149,12 +149,14 @@ def run(args) -> int:
                   f"{c.seconds(sp.wall_time)}")
         else:
             print(f"damping {z:g}: {sp.periods.size} periods, {sp.scheme}, runs {c.seconds(sp.wall_time)}, "
-                  f"max error of Sd and Sa {np.max(sp.error):.1e} ({sp.check})")
-        rows = [["T [s]"] + [f"{k} [{v}]" for k, v in heads.items()] + (["error"] if sp.error is not None else [])]
+                  f"max error of Sd and Sa {np.max(sp.error):.1e} ({sp.check}); the runs' own estimates: "
+                  f"{_worst(sp.estimate)}")
+        runs = sp.error is not None
+        rows = [["T [s]"] + [f"{k} [{v}]" for k, v in heads.items()] + (["error", "estimate"] if runs else [])]
         step = max(1, sp.periods.size // 10)
         for k in range(0, sp.periods.size, step):
             rows.append([f"{sp.periods[k]:.4g}", f"{si.Sd[k]:.4g}", f"{si.PSv[k]:.4g}", f"{shown.PSa[k]:.4g}",
-                         f"{shown.Sa[k]:.4g}"] + ([f"{sp.error[k]:.1e}"] if sp.error is not None else []))
+                         f"{shown.Sa[k]:.4g}"] + ([f"{sp.error[k]:.1e}", f"{sp.estimate[k]:.1e}"] if runs else []))
         print("\n".join("  " + line for line in c.table(rows, right=set(range(len(rows[0]))))))
     code = 0
     if args.out:
@@ -162,14 +164,16 @@ def run(args) -> int:
             with open(args.out, "w", encoding="utf-8") as fh:
                 # each column's unit in its header: "PSa [g]" stays "PSa [g]" at any --scale
                 fh.write(",".join(["damping", "period [s]"] + [f"{k} [{v}]" for k, v in heads.items()]
-                                  + ["error", "dt [s]"]) + "\n")
+                                  + ["error", "dt [s]", "estimate"]) + "\n")
                 for sp in results:
                     shown = sp.in_units(units) if units else sp
                     si = sp.in_units("m/s^2") if units else sp
                     for k in range(sp.periods.size):  # shortest round-trip decimals
-                        error = sp.error[k] if sp.error is not None else math.nan  # exact: no error to report
+                        # exact: no error to report, nor an estimate
+                        error = sp.error[k] if sp.error is not None else math.nan
+                        estimate = sp.estimate[k] if sp.estimate is not None else math.nan
                         values = (sp.damping, sp.periods[k], si.Sd[k], si.PSv[k], shown.PSa[k], shown.Sa[k],
-                                  error, sp.dt[k])
+                                  error, sp.dt[k], estimate)
                         fh.write(",".join(repr(float(x)) for x in values) + "\n")
             print(f"wrote {args.out}")
         except OSError as exc:
@@ -195,6 +199,7 @@ def run_inelastic(args, record, units: str) -> int:
     import numpy as np
 
     from .. import NvibError, inelastic_spectrum
+    from ..analysis.inelastic import _cell
 
     if args.ductility is not None and args.strength_ratio is not None:
         raise c.Usage("--ductility", "gives a constant-ductility spectrum, --strength-ratio a constant-strength "
@@ -219,7 +224,8 @@ def run_inelastic(args, record, units: str) -> int:
     how = ", ".join(f"{k} = {v:g}" for k, v in law.items() if k != "type")
     print(f"{sp.kind}, {law['type']}{f' ({how})' if how else ''}, damping {sp.damping:g}: {sp.periods.size} "
           f"periods x {sp.targets.size} targets, {sp.scheme}, {sp.runs} SDOF runs in {c.seconds(sp.wall_time)}, "
-          f"largest error {worst:.1e} (accuracy {sp.accuracy:g}, measured by halving the step)")
+          f"largest error {worst:.1e} (accuracy {sp.accuracy:g}, measured by halving the step); the runs' own "
+          f"estimates: {_worst(sp.estimate)}")
     columns = [(h, v) for h, v in sp.columns() if not h.startswith(("u_y", "dt"))]
     step = max(1, sp.periods.size // 10)
     for k in range(sp.targets.size):
@@ -234,7 +240,9 @@ def run_inelastic(args, record, units: str) -> int:
                c.write_output("spectrum", "--plot", args.plot, sp.plot))
 
 
-def _cell(x: float, header: str) -> str:
-    if x != x:  # NaN: not found (the warnings say why)
-        return "n/a"
-    return f"{x:.1e}" if header == "error" else f"{x:.4g}"
+def _worst(estimate) -> str:
+    """The largest of the runs' estimates, or that there are none (a scheme without one)."""
+    import numpy as np
+
+    return f"largest {np.nanmax(estimate):.1e}" if np.any(~np.isnan(estimate)) else "none"
+
