@@ -3,8 +3,9 @@
 The runs are a list of models, or one model under several ground motions and/or scale factors, or
 one model with parameter variations of named effects, with one scheme or one per run. Models of
 built-in effects run on threads (the solver releases the GIL, so they use every core); models that
-call Python run in processes (they pickle). Results come back in input order; a run that fails keeps
-its status and message in its own result and the others go on. ``keep="peaks"`` keeps a summary per
+call Python run in processes (they pickle: their lambdas and closures by value, through cloudpickle).
+Results come back in input order; a run that fails keeps its status and message in its own result and
+the others go on. ``keep="peaks"`` keeps a summary per
 run instead of its history, so memory stays bounded however many runs there are.
 """
 
@@ -15,7 +16,6 @@ import dataclasses
 import itertools
 import math
 import os
-import pickle
 import signal
 import sys
 import time
@@ -405,9 +405,12 @@ def _python_callables(model: Model):
 
 
 def _check_picklable(items, *, single: bool) -> None:
-    """Models that call Python run in worker processes, which get them pickled: their callables are tried
-    here, before any pool starts, so that a lambda or a function defined inside another is an error naming
-    it and what to do instead of a PicklingError out of the pool."""
+    """Models that call Python run in worker processes, which get them pickled (by cloudpickle, so lambdas
+    and closures go by value): their callables are tried here, before any pool starts, so that one that
+    refers to what cannot travel (a lock, an open file, a C++ object) is an error naming it and what to do
+    instead of a PicklingError out of the pool."""
+    import cloudpickle
+
     seen = set()
     for k, item in enumerate(items):
         model = item[0]
@@ -416,12 +419,13 @@ def _check_picklable(items, *, single: bool) -> None:
         seen.add(id(model))
         for where, fn in _python_callables(model):
             try:
-                pickle.dumps(fn)
-            except Exception as exc:  # PicklingError, AttributeError ("Can't pickle local object"), TypeError
+                cloudpickle.dumps(fn)
+            except Exception as exc:  # PicklingError, TypeError ("cannot pickle '_thread.lock' object"), ...
                 name = f"{'models' if single else f'models[{k}]'}.{where}"
                 raise _checks.type_error(name, f"{getattr(fn, '__qualname__', type(fn).__name__)} cannot be pickled "
-                                               f"({exc}), and a model that calls Python runs in worker processes, "
-                                               "which need it pickled: define it with def at module level, or run "
+                                               f"({type(exc).__name__}: {exc}): a model that calls Python runs in "
+                                               "worker processes, which get it with what it refers to; let it "
+                                               "refer only to what pickles (numbers, arrays, functions), or run "
                                                "the models in threads (threads=1, or processes=False)") from None
 
 
@@ -545,7 +549,8 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
         items.append((m, g, s, changes, label, sc, {"t_end": own_ends[k]} if own_ends is not None else {}))
     workers = threads if threads is not None else max(1, os.cpu_count() or 1)
     uses_python = any(item[0]._core.has_python for item in items)
-    if client is None and (workers > 1 or processes) and (processes if processes is not None else uses_python):
+    to_processes = (workers > 1 or processes) and (processes if processes is not None else uses_python)
+    if (client is not None and uses_python) or (client is None and to_processes):
         _check_picklable(items, single=isinstance(models, Model))
     bar = ProgressBar(enabled=bool(progress))
     results = [None] * len(items)

@@ -132,6 +132,14 @@ def _rebuild_model(init, state) -> "Model":
     return model
 
 
+def _rebuild_cloudpickled(payload: bytes) -> "Model":
+    """A model whose arguments were pickled by cloudpickle (its Python callables: lambdas and closures
+    travel by value); the standard unpickler reads cloudpickle's output."""
+    import pickle
+
+    return _rebuild_model(*pickle.loads(payload))
+
+
 class Model:
     """M a + K u + C v + F(u, v, t) = 0 with F the declared effects and an optional force callable.
 
@@ -274,7 +282,12 @@ class Model:
 
     def __reduce__(self):
         """Pickled as its arguments and its attributes (u0, v0, scene, ...): the core is rebuilt on loading, so
-        a model goes to another process (a process pool, Dask) as long as its callables pickle."""
+        a model goes to another process (a process pool, Dask). A model that calls Python has its arguments
+        pickled by cloudpickle, so that lambdas and closures (the code and what it refers to) travel too."""
+        if self._core.has_python:
+            import cloudpickle
+
+            return (_rebuild_cloudpickled, (cloudpickle.dumps((self._init, self._state())),))
         return (_rebuild_model, (self._init, self._state()))
 
     def _state(self) -> dict:

@@ -93,19 +93,55 @@ def test_python_models_run_in_processes():
     assert [lab["model"] for lab in batch.labels] == [0, 1, 2]
 
 
-def test_a_callable_that_does_not_pickle_is_named_before_any_process_starts():
-    """A lambda (or a function defined inside another) cannot go to a worker process: the error names it
-    and what to do, instead of a bare PicklingError out of the pool. Threads take it as it is."""
+def lambda_models():
+    """A lambda force and a closure law (the README's own style): they go to processes by value."""
+    stiffness = 100.0
+
+    def law(d, dd, t):  # a closure over stiffness
+        return stiffness * d + 0.1 * d ** 3
+
+    lam = nvib.Model([1.0], force=lambda u, v, t: 4.0 * u + 0.1 * v, u0=[0.5])
+    closure = nvib.Model([1.0], effects=[{"type": "callable", "measure": {0: 1.0}, "law": law},
+                                         {"type": "ground_acceleration",
+                                          "signal": {"kind": "sine", "amplitude": 1.0, "omega": 3.0}}])
+    return lam, closure
+
+
+def test_lambdas_and_closures_run_in_processes_as_serially():
+    lam, closure = lambda_models()
+    run = dict(progress=False, dt=0.01, t_end=1.0)
+    for kw in (dict(threads=2), dict(threads=2, processes=True)):
+        batch = nvib.solve_many([lam, closure], nvib.CEMDTS(), **kw, **run)
+        for m, r in zip((lam, closure), batch):
+            same(r, nvib.solve(m, nvib.CEMDTS(), dt=0.01, t_end=1.0))
+    batch = nvib.solve_many(closure, nvib.CEMDTS(), scales=[1.0, 2.0], threads=2, **run)
+    serial = nvib.solve_many(closure, nvib.CEMDTS(), scales=[1.0, 2.0], threads=1, **run)
+    for a, b in zip(batch, serial):
+        same(a, b)
+
+
+def test_a_callable_that_cannot_travel_is_named_before_any_process_starts():
+    """A callable that refers to what cannot be pickled (a lock) cannot go to a worker process: the error
+    names it and what to do, instead of a bare PicklingError out of the pool. Threads take it as it is."""
+    import threading
+
     good = nvib.Model([1.0], force=duffing, u0=[0.5])
-    lam = nvib.Model([1.0], force=lambda u, v, t: 4.0 * u, u0=[0.5])
+    lock = threading.Lock()
+
+    def locked(u, v, t):
+        with lock:
+            return 4.0 * u
+
+    bad = nvib.Model([1.0], force=locked, u0=[0.5])
     with pytest.raises(nvib.ArgumentTypeError) as exc:
-        nvib.solve_many([good, lam], nvib.CEMDTS(), threads=2, progress=False, dt=0.01, t_end=0.1)
+        nvib.solve_many([good, bad], nvib.CEMDTS(), threads=2, progress=False, dt=0.01, t_end=0.1)
     assert exc.value.argument == "models[1].force"
-    assert "<lambda> cannot be pickled" in str(exc.value) and "def at module level" in str(exc.value)
+    assert "locked cannot be pickled" in str(exc.value) and "_thread.lock" in str(exc.value)
     assert "threads=1, or processes=False" in str(exc.value)
 
-    def law(d, dd, t):  # local: pickles no better than a lambda
-        return 100.0 * d
+    def law(d, dd, t):
+        with lock:
+            return 100.0 * d
 
     one = nvib.Model([1.0], effects=[{"type": "callable", "measure": {0: 1.0}, "law": law},
                                      {"type": "ground_acceleration", "signal": {"kind": "sine", "amplitude": 1.0,
@@ -114,7 +150,7 @@ def test_a_callable_that_does_not_pickle_is_named_before_any_process_starts():
         nvib.solve_many(one, nvib.CEMDTS(), scales=[1.0, 2.0], threads=2, progress=False, dt=0.01, t_end=0.1)
     assert exc.value.argument == "models.effects[0].law" and "law cannot be pickled" in str(exc.value)
     for kw in (dict(threads=1), dict(threads=2, processes=False)):
-        batch = nvib.solve_many([good, lam], nvib.CEMDTS(), progress=False, dt=0.01, t_end=0.1, **kw)
+        batch = nvib.solve_many([good, bad], nvib.CEMDTS(), progress=False, dt=0.01, t_end=0.1, **kw)
         assert batch.failed == []
 
 
@@ -196,6 +232,15 @@ def test_dask_local_cluster_gives_the_same_results():
         remote = nvib.solve_many(base, nvib.CEMDTS(), client=client, **kw)
     assert remote.labels == local.labels
     for a, b in zip(local, remote):
+        same(a, b)
+    # models with a lambda and a closure go to the workers by value
+    lam, closure = lambda_models()
+    run = dict(progress=False, dt=0.01, t_end=1.0)
+    serial = nvib.solve_many([lam, closure], nvib.CEMDTS(), threads=1, **run)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = nvib.solve_many([lam, closure], nvib.CEMDTS(), client=client, **run)
+    for a, b in zip(serial, remote):
         same(a, b)
 
 
