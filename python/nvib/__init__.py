@@ -29,6 +29,7 @@ from ._errors import (ArgumentError, ArgumentTypeError, ConvergenceError, Diverg
 from ._labels import scheme_label
 from ._model import EFFECT_PARAMETERS, LawResponse, Model, drive
 from ._check_law import LawCheck, check_law
+from ._compiled import LAW_SIGNATURE
 from ._records import STANDARD_GRAVITY, GroundMotion, RecordError
 from ._batch import Batch, RunError, RunSummary, solve_many
 from ._damping import rayleigh, rayleigh_coefficients
@@ -55,7 +56,7 @@ __all__ = sorted([
     "ArgumentError", "ArgumentTypeError", "ConvergenceError", "DEFAULT_MAX_ENERGY_ERROR", "DivergenceError", "ENERGY_WARNING", "ERROR_WARNING",
     "Estimate", "estimate", "GroundMotion", "RecordError", "STANDARD_GRAVITY",
     "Batch", "RunError", "RunSummary", "solve_many", "Spectrum", "spectrum", "InelasticSpectrum", "inelastic_spectrum", "IDA", "ida", "Fragility", "fragility", "rayleigh", "rayleigh_coefficients", "load_result",
-    "EFFECT_PARAMETERS", "Energy", "LawResponse", "LawCheck", "check_law", "drive", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
+    "EFFECT_PARAMETERS", "Energy", "LawResponse", "LawCheck", "LAW_SIGNATURE", "check_law", "drive", "Failure", "Model", "Newton", "NvibError", "Reference", "Result", "SceneError",
     "SingularMatrixError", "Stats", "Status", "Stepper", "cheapest", "cmake_dir", "cost", "cost_scipy",
     "default_max_displacement", "exact", "expm", "include_dir", "load_scene", "markdown_table",
     "plot_work_precision", "reference", "scene_names", "scenes", "scheme_label", "schemes", "solve",

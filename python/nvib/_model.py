@@ -6,7 +6,7 @@ import numbers
 
 import numpy as np
 
-from . import _checks, _core
+from . import _checks, _compiled, _core
 from ._core import ArgumentError
 from ._names import GeneratedNames, NumberedNames
 from ._records import GroundMotion
@@ -237,6 +237,8 @@ class Model:
             for i, e in enumerate(effects):
                 if isinstance(e, dict) and (e.get("name") in self.without or e.get("type") in self.without):
                     continue
+                if isinstance(e, dict) and e.get("type") == "compiled" and "law" in e:
+                    e = _compiled.lower(f"effects[{i}]", e)  # the built-in law that calls it
                 if isinstance(e, dict) and e.get("type") == "callable":
                     laws.append(self._python_law(i, e))
                 elif isinstance(e, dict) and "i" in e:

@@ -93,7 +93,8 @@ inline fx::Signal make_signal(const std::string& kind, double amplitude, double 
 }
 
 // {type: {doc, source, parameters: [(name, default or None, doc, may be unset, choices or None)], signal,
-//  signal_required, uses_displacement, uses_velocity, is_load, state: [names of the internal variables]}}
+//  signal_required, uses_displacement, uses_velocity, is_load, knows_energy (its stored energy is known),
+//  state: [names of the internal variables]}}
 inline py::dict laws() {
   py::dict out;
   fx::AllLaws::for_each([&](auto L) {
@@ -114,6 +115,7 @@ inline py::dict laws() {
     d["uses_displacement"] = Lw::uses_displacement;
     d["uses_velocity"] = Lw::uses_velocity;
     d["is_load"] = Lw::is_load;
+    d["knows_energy"] = Lw::knows_energy;
     d["state"] = state;
     out[Lw::key] = d;
   });

@@ -11,6 +11,8 @@ from scipy.integrate import solve_ivp
 
 import nvib
 
+from _compiled_laws import BILINEAR, HARDENING, address
+
 # Every scheme and the variants that take other paths through the commit: the synchronized and the
 # half-step central difference, the two explicit two-step methods, Newmark with every Newton mode,
 # generalized-alpha at its default (the implicit midpoint rule, alpha_f = 1/2: the commit is a new
@@ -68,6 +70,11 @@ LAW_CASES = {
     "imk_peak_oriented": ({"k": 300.0, "fy": 3.0, "up": 0.02, "upc": 0.1, "uu": 1.0, "fcap_fy": 1.2,
                            "fres_fy": 0.3, "lambda_s": 5.0, "lambda_c": 5.0, "lambda_a": 5.0, "lambda_k": 5.0},
                           lambda r: {6.0, 16.0} <= set(r.state["branch"]) and not r.state["failed"].any()),
+    # compiled laws (through ctypes pointers): the hardening spring's and the bilinear law's arithmetic
+    "compiled": ({"address": address(HARDENING), "uses_time": 0.0, "p0": 200.0, "p1": 300.0},
+                 lambda r: np.max(300.0 * r.measure**2) > 0.1),
+    "compiled_state": ({"address": address(BILINEAR), "uses_time": 0.0, "state_size": 3.0, "p0": 300.0, "p1": 3.0,
+                        "p2": 0.05}, lambda r: np.ptp(r.state["s0"]) > 0.02),
 }
 
 

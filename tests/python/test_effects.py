@@ -12,6 +12,8 @@ import pytest
 
 import nvib
 
+from _compiled_laws import BILINEAR, HARDENING, address
+
 DOFS = ["a", "b", "c", "d"]
 MASS = [1.0, 2.0, 0.5, 3.0]
 MEASURE = {"a": 0.7, "c": -1.3, "d": 2.1}
@@ -67,6 +69,9 @@ LAWS = [
     ("hook_taut", {"type": "hook", "k": 600.0}, lambda d, dd, t: 600.0 * d if d > 0.0 else 0.0),
     # a negative spring -(P / h) d
     ("p_delta", {"type": "p_delta", "P": 2e3, "h": 3.5}, lambda d, dd, t: -(2e3 / 3.5) * d),
+    # a compiled law (through a ctypes pointer) doing the hardening spring's arithmetic
+    ("compiled", {"type": "compiled", "address": address(HARDENING), "p0": 100.0, "p1": 30.0},
+     lambda d, dd, t: 100.0 * (1.0 + 30.0 * d * d) * d),
 ]
 
 
@@ -436,6 +441,11 @@ FLAG_CASES = [
     ("friction_mu_N", {"type": "friction", "k": 1.0, "mu": 0.3, "N": 10.0}, False, False, False),
     ("imk_peak_oriented", {"type": "imk_peak_oriented", "k": 1.0, "fy": 1.0, "up": 1.0, "upc": 2.0, "uu": 5.0,
                            "fcap_fy": 1.1}, False, False, False),
+    # a compiled law declares its use of time; its use of the velocity is not known, so it is assumed
+    ("compiled", {"type": "compiled", "address": address(HARDENING), "uses_time": 0.0}, True, False, False),
+    ("compiled_uses_time", {"type": "compiled", "address": address(HARDENING)}, True, True, False),
+    ("compiled_state", {"type": "compiled_state", "address": address(BILINEAR), "uses_time": 0.0, "state_size": 3.0,
+                        "p0": 1.0, "p1": 1.0}, True, False, False),
 ]
 
 

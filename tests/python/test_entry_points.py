@@ -26,7 +26,7 @@ from nvib.analysis import exact, stability
 # Exceptions and what the library hands back (results, summaries, containers): built by nvib, not by a caller
 # with settings. Functions without arguments (folders, names) have nothing to refuse.
 SKIP = {"ArgumentError", "ArgumentTypeError", "ConvergenceError", "DivergenceError", "NvibError", "RecordError",
-        "SceneError", "SingularMatrixError", "Batch", "Energy", "Estimate", "Failure", "Fragility", "IDA", "LawResponse",
+        "SceneError", "SingularMatrixError", "Batch", "Energy", "Estimate", "Failure", "Fragility", "IDA", "LawCheck", "LawResponse",
         "InelasticSpectrum", "Reference", "Result", "RunError", "RunSummary", "Spectrum", "Stats", "Status", "cmake_dir",
         "include_dir",
         "scene_names", "schemes", "stability.NvibError", "stability.Model", "stability.Stepper", "stability.StepLimit",
@@ -124,6 +124,8 @@ def calls(files) -> dict:
         "cost_scipy": (nvib.cost_scipy, (osc, ("RK45",), (1e-3,)), {"t_end": 0.1, "repeats": 1}),
         "default_max_displacement": (nvib.default_max_displacement, ([0.1], [0.0], 1.0), {}),
         "drive": (nvib.drive, ({"type": "spring", "k": 2.0}, [0.0, 0.1]), {}),
+        "check_law": (nvib.check_law, ({"type": "callable", "law": lambda d, dd, t: 2.0 * d,
+                                        "tangent": lambda d, dd, t: (2.0, 0.0)}, [0.0, 0.1]), {}),
         "estimate": (nvib.estimate, (osc, nvib.Newmark()), dict(run)),
         "expm": (nvib.expm, (np.eye(2),), {}),
         "ida": (nvib.ida, (model, [record], [1.0]), {"dt": 0.01, "im": "scale", "measure": "peak_drift",

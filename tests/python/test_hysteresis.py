@@ -20,7 +20,7 @@ from _hysteresis import (LAW_CASES, MEMORY_NAMES, SCHEME_IDS, chain, fitted_orde
 
 def test_the_cases_cover_every_law_but_the_loads():
     assert {law_type(c) for c in LAW_CASES} == set(nvib.EFFECT_PARAMETERS) - loads()
-    assert laws_with_memory() == {"bilinear", "bouc_wen", "friction", "imk_peak_oriented"}
+    assert laws_with_memory() == {"bilinear", "bouc_wen", "friction", "imk_peak_oriented", "compiled_state"}
     assert loads() == {"constant_force", "harmonic_force", "ground_acceleration"}
 
 
@@ -50,7 +50,7 @@ def test_the_state_vector_holds_the_internal_variables():
     """Stepper.state() ends with the committed internal variables, in the laws' order, width per law."""
     model = memory_chain()
     widths = {t: len(nvib._core.laws()[t]["state"]) for t in laws_with_memory()}
-    assert widths == {"bilinear": 3, "friction": 3, "bouc_wen": 4, "imk_peak_oriented": 32}
+    assert widths == {"bilinear": 3, "friction": 3, "bouc_wen": 4, "imk_peak_oriented": 32, "compiled_state": 8}
     assert model._core.state_size == 3 + 3 + 4 + 4 + 32
     st = nvib.Stepper(model, nvib.CEMDTS(), dt=1e-3)
     st.step(500)

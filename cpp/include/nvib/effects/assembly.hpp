@@ -112,7 +112,7 @@ class EffectsPlus {
   }
 
   bool accounts_energy() const {
-    if constexpr (traits::has_energy<Extra>::value) return traits::accounts_energy(extra_);
+    if constexpr (traits::has_energy<Extra>::value) return effects_.accounts_energy() && traits::accounts_energy(extra_);
     return false;
   }
   double potential(const CVecRef& u, double t) const {

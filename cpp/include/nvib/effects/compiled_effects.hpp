@@ -99,6 +99,12 @@ class CompiledEffects {
   bool uses_velocity() const { return velocity_; }
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return linear_; }
+  // Every evaluated law knows its stored energy (a compiled law does not: no energy account).
+  bool accounts_energy() const {
+    for (const kernels::Group& g : groups_)
+      if (!dispatch(g.law, [](auto L) { return decltype(L)::knows_energy; })) return false;
+    return true;
+  }
   // The internal variables of the laws with memory, all effects' one after the other, as the laws
   // start (the committed states of each model copy begin as this).
   bool has_state() const { return !initial_state_.empty(); }

@@ -126,6 +126,7 @@ class EffectSet {
   bool uses_velocity() const { return c_->uses_velocity(); }
   bool uses_time() const { return c_->uses_time(); }
   bool is_linear() const { return c_->is_linear(); }
+  bool accounts_energy() const { return c_->accounts_energy(); }
 
   // ---- laws with memory ----
   bool has_state() const { return !committed_.empty(); }

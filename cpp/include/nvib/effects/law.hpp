@@ -71,6 +71,7 @@ struct Trial {
 struct LawBase {
   static constexpr bool uses_displacement = true, uses_velocity = false, is_load = false;
   static constexpr bool assembled = false;
+  static constexpr bool knows_energy = true;  // false: its stored energy is not known (a compiled law)
   static constexpr const char* signal = nullptr;  // name of its signal parameter
   static constexpr bool signal_required = false;
   static constexpr const char* source = "";

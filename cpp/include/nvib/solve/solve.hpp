@@ -190,7 +190,8 @@ double checked_run_options(const SolveOptions& opt, const ModelT& model, Index n
   NVIB_CHECK(energy_limit == std::numeric_limits<double>::infinity() || opt.energy, "max_energy_error",
              "needs the energy accounting (energy = true)");
   NVIB_CHECK(!opt.energy || model.accounts_energy(), "energy",
-             "the model has a force whose energy is unknown (a user callable); energy accounting needs built-in effects");
+             "the model has a force whose energy is unknown (a user callable or a compiled law); energy accounting "
+             "needs built-in effects");
   NVIB_CHECK(std::isnan(opt.collapse_deformation) || (set != nullptr && set->has_state()), "collapse_deformation",
              "applies to effects with memory, and this model has none");
   return energy_limit;

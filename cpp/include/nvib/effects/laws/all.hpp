@@ -6,6 +6,7 @@
 #include "../law.hpp"
 #include "bilinear.hpp"
 #include "bouc_wen.hpp"
+#include "compiled.hpp"
 #include "constant_force.hpp"
 #include "cubic_spring.hpp"
 #include "damper.hpp"
@@ -28,7 +29,7 @@ namespace effects {
 // The order is the evaluation order of the effects' groups (and so of the sums of their forces).
 using AllLaws = LawList<Spring, Damper, HardeningSpring, CubicSpring, PowerDamper, PendulumGravity, HertzContact,
                         ConstantForce, HarmonicForce, GroundAcceleration, Bilinear, BoucWen, Friction, Gap, Hook,
-                        ImkPeakOriented, PDelta>;
+                        ImkPeakOriented, PDelta, Compiled, CompiledState>;
 
 }  // namespace effects
 }  // namespace nvib
