@@ -23,13 +23,13 @@ from concurrent.futures.process import BrokenProcessPool
 
 import numpy as np
 
-from . import _checks
+from . import _checks, _compiled
 from ._labels import scheme_label
 from ._model import Model
 from ._progress import ProgressBar
 from ._records import GroundMotion
 from . import _core
-from ._core import ArgumentError, StopToken
+from ._core import ArgumentError, ArgumentTypeError, StopToken
 from ._solve import Status, _solve, check_option_names, check_settings, solve
 
 __all__ = ["solve_many", "RunSummary", "RunError", "Batch"]
@@ -414,9 +414,16 @@ def _check_picklable(items, *, single: bool) -> None:
     seen = set()
     for k, item in enumerate(items):
         model = item[0]
-        if id(model) in seen or not model._core.has_python:
+        if id(model) in seen:
             continue
         seen.add(id(model))
+        try:  # compiled laws: those given by an address cannot travel
+            _compiled.travelling(model._init[1].get("effects"))
+        except ArgumentTypeError as exc:
+            name = f"{'models' if single else f'models[{k}]'}.{exc.argument}"
+            raise _checks.type_error(name, exc.reason) from None
+        if not model._core.has_python:
+            continue
         for where, fn in _python_callables(model):
             try:
                 cloudpickle.dumps(fn)
@@ -550,7 +557,7 @@ def solve_many(models, scheme, *, dt: float, t_end: float, ground_motions=None, 
     workers = threads if threads is not None else max(1, os.cpu_count() or 1)
     uses_python = any(item[0]._core.has_python for item in items)
     to_processes = (workers > 1 or processes) and (processes if processes is not None else uses_python)
-    if (client is not None and uses_python) or (client is None and to_processes):
+    if client is not None or to_processes:
         _check_picklable(items, single=isinstance(models, Model))
     bar = ProgressBar(enabled=bool(progress))
     results = [None] * len(items)

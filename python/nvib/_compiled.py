@@ -68,6 +68,47 @@ def address_of(where: str, law) -> int:
     return address
 
 
+class _Recompiled:
+    """A Numba cfunc on its way to another process: its Python function (pickled by value), compiled again
+    there (a cfunc's machine code does not pickle)."""
+
+    def __init__(self, pyfunc):
+        self.pyfunc = pyfunc
+
+    def __reduce__(self):
+        import cloudpickle
+
+        return (_recompile, (cloudpickle.dumps(self.pyfunc),))
+
+
+def _recompile(payload: bytes):
+    import pickle
+
+    import numba
+
+    return numba.cfunc(LAW_SIGNATURE)(pickle.loads(payload))
+
+
+def travelling(effects):
+    """The effects as they travel to another process: each compiled law a Numba cfunc gives as its Python
+    function, compiled again there; one given by its address (a ctypes pointer, a LowLevelCallable, an int)
+    refused, naming it (its code is in this process only)."""
+    out = []
+    for i, e in enumerate(effects or []):
+        if isinstance(e, dict) and e.get("type") == "compiled" and "law" in e:
+            law = e["law"]
+            if hasattr(law, "_pyfunc") and hasattr(law, "_sig"):
+                e = {**e, "law": _Recompiled(law._pyfunc)}
+            else:
+                raise _checks.type_error(f"effects[{i}].law", "a compiled law given by its address cannot go to "
+                                                              "another process (its code is in this one): give "
+                                                              "the Numba cfunc, compiled again there from its "
+                                                              "Python function, or run on threads (threads=, "
+                                                              "processes=False)")
+        out.append(e)
+    return out
+
+
 def ctypes_law(fn):
     """A ctypes function pointer of the law's signature calling the Python function ``fn(params, state, d,
     dd, t, out, trial_state)`` (pointers as ctypes arrays): the contract without a compiler, to test a law

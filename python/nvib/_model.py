@@ -285,12 +285,15 @@ class Model:
     def __reduce__(self):
         """Pickled as its arguments and its attributes (u0, v0, scene, ...): the core is rebuilt on loading, so
         a model goes to another process (a process pool, Dask). A model that calls Python has its arguments
-        pickled by cloudpickle, so that lambdas and closures (the code and what it refers to) travel too."""
+        pickled by cloudpickle, so that lambdas and closures (the code and what it refers to) travel too; a
+        compiled law made by Numba travels as its Python function and is compiled again on loading."""
+        mass, kwargs = self._init
+        init = (mass, {**kwargs, "effects": _compiled.travelling(kwargs["effects"])}) if kwargs.get("effects") else self._init
         if self._core.has_python:
             import cloudpickle
 
-            return (_rebuild_cloudpickled, (cloudpickle.dumps((self._init, self._state())),))
-        return (_rebuild_model, (self._init, self._state()))
+            return (_rebuild_cloudpickled, (cloudpickle.dumps((init, self._state())),))
+        return (_rebuild_model, (init, self._state()))
 
     def _state(self) -> dict:
         """Its attributes besides the core and what is made from the arguments (u0, v0, scene, ...)."""

@@ -181,3 +181,44 @@ def test_bad_input_names_the_argument(change, arg):
     with pytest.raises((nvib.ArgumentError, nvib.ArgumentTypeError)) as exc:
         nvib.Model([1.0], effects=[{**spec, **change}])
     assert exc.value.argument == arg
+
+
+# ---- batches -----------------------------------------------------------------------------------------
+
+def test_a_numba_law_travels_as_its_python_function_compiled_again(numba_laws):
+    """A cfunc's machine code does not pickle: a model travels with the law's Python function, compiled again
+    where it lands, so processes and Dask give the runs made here."""
+    import pickle
+
+    _, model = building_with(numba_laws["hardening"])
+    here = nvib.solve(model, nvib.Newmark(), dt=2e-3, t_end=0.5)
+    np.testing.assert_array_equal(nvib.solve(pickle.loads(pickle.dumps(model)), nvib.Newmark(), dt=2e-3,
+                                             t_end=0.5).u, here.u)
+    run = dict(dt=2e-3, t_end=0.5, progress=False, scales=[0.5, 1.0])
+    serial = nvib.solve_many(model, nvib.Newmark(), threads=1, **run)
+    for other in (nvib.solve_many(model, nvib.Newmark(), threads=2, processes=True, **run),):
+        for a, b in zip(serial, other):
+            np.testing.assert_array_equal(a.u, b.u)
+
+
+def test_a_numba_law_runs_on_a_dask_cluster(numba_laws):
+    distributed = pytest.importorskip("dask.distributed")
+    _, model = building_with(numba_laws["hardening"])
+    run = dict(dt=2e-3, t_end=0.5, progress=False, scales=[0.5, 1.0, 1.5])
+    serial = nvib.solve_many(model, nvib.Newmark(), threads=1, **run)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = nvib.solve_many(model, nvib.Newmark(), client=client, **run)
+    for a, b in zip(serial, remote):
+        np.testing.assert_array_equal(a.u, b.u)
+
+
+def test_a_law_given_by_its_address_stays_in_its_process():
+    """A ctypes pointer (or an address) names code in this process only: going to processes is refused before
+    any starts, naming the law; threads run it."""
+    _, model = building_with(ctypes_law(hardening_py))
+    run = dict(dt=2e-3, t_end=0.05, progress=False, scales=[0.5, 1.0])
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.solve_many(model, nvib.Newmark(), threads=2, processes=True, **run)
+    assert exc.value.argument == "models.effects[0].law" and "by its address" in str(exc.value)
+    assert not nvib.solve_many(model, nvib.Newmark(), threads=2, **run).failed
