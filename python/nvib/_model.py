@@ -223,7 +223,7 @@ class Model:
         self._declared = effects is not None
         self.python_laws: list[str] = []  # where each Python law sits ("effects[3]")
         self.without = (without,) if isinstance(without, str) else tuple(without)
-        builtin, laws, arrays = [], [], []
+        builtin, laws, arrays, vector_laws = [], [], [], []
         if effects is not None:
             effects = list(effects)
             known = {e.get("name") for e in effects if isinstance(e, dict)} | {
@@ -239,18 +239,20 @@ class Model:
                     continue
                 if isinstance(e, dict) and e.get("type") == "compiled" and "law" in e:
                     e = _compiled.lower(f"effects[{i}]", e)  # the built-in law that calls it
-                if isinstance(e, dict) and e.get("type") == "callable":
+                if isinstance(e, dict) and e.get("type") == "callable" and "i" in e:
+                    vector_laws.append(self._python_array_law(i, e))
+                elif isinstance(e, dict) and e.get("type") == "callable":
                     laws.append(self._python_law(i, e))
                 elif isinstance(e, dict) and "i" in e:
                     arrays.append(self._effect_array(i, e))
                 else:
                     builtin.append(self._effect(i, e))
-            self.python_laws = [law[4] for law in laws]
+            self.python_laws = sorted((law[4] for law in laws + vector_laws), key=lambda w: int(w[8:-1]))
         elif self.without:
             raise _checks.value_error("without", "only a model of declared effects can leave effects out")
         # With Python in the loop (force or callable laws) the GIL is kept during runs.
         self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, _checks.boolean("uses_velocity", uses_velocity),
-                                 _checks.boolean("uses_time", uses_time), laws, arrays)
+                                 _checks.boolean("uses_time", uses_time), laws, arrays, vector_laws)
 
     def __repr__(self) -> str:
         """Size, DOFs, mass, linear parts, effects by type, Python callables and flags, in one line."""
@@ -347,6 +349,50 @@ class Model:
             flags.append(value)
         _effect_name(where, spec)
         return (index, coef, law, tangent, where, *flags, initial)
+
+    def _python_array_law(self, i: int, spec: dict):
+        """A vectorised Python law on many effects: {"type": "callable", "i": [...], "j": [...] (optional; -1:
+        the ground), "law": f(d, d', t) -> forces, "tangent": optional (d, d', t) -> (df/dd, df/dd'), arrays of
+        every effect at once; with memory "state": the initial internal variables (one row for every effect,
+        or one row per effect), then law(d, d', t, state) -> (forces, states) and tangent(d, d', t, state),
+        ``state`` the committed states, an array (effects, variables)}."""
+        where = f"effects[{i}]"
+        allowed = {"type", "i", "j", "law", "tangent", "uses_velocity", "uses_time", "name", "note", "state"}
+        for key in spec:
+            if key not in allowed:
+                raise _checks.value_error(f"{where}.{key}", f"unknown key of a vectorised callable effect (expected "
+                                                            f"{', '.join(sorted(allowed - {'type'}))})")
+        law, tangent = spec.get("law"), spec.get("tangent")
+        if not callable(law):
+            raise _checks.type_error(f"{where}.law", f"expected a callable law(d, dd, t) -> forces (arrays of every "
+                                                     f"effect), got {type(law).__name__}")
+        if tangent is not None and not callable(tangent):
+            raise _checks.type_error(f"{where}.tangent", f"expected a callable tangent(d, dd, t) -> (df/dd, df/ddd), "
+                                                         f"got {type(tangent).__name__}")
+        idx = self._dof_array(f"{where}.i", spec["i"], ground=False)
+        jspec = spec.get("j", -1)
+        if isinstance(jspec, (str, numbers.Integral)) and not isinstance(jspec, bool):
+            jspec = [jspec] * idx.size
+        jdx = self._dof_array(f"{where}.j", jspec, ground=True)
+        if jdx.shape != idx.shape:
+            raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
+        initial, width = [], 0
+        if spec.get("state") is not None:
+            state = _checks.real_array(f"{where}.state", spec["state"])
+            if state.ndim == 1:
+                state = np.tile(state, (idx.size, 1))
+            if state.ndim != 2 or state.shape[0] != idx.size or state.shape[1] == 0:
+                raise _checks.value_error(f"{where}.state", f"expected the initial internal variables: one row for "
+                                                            f"every effect, or {idx.size} rows (one per effect)")
+            initial, width = np.ascontiguousarray(state).reshape(-1).tolist(), state.shape[1]
+        flags = []
+        for key in ("uses_velocity", "uses_time"):
+            value = spec.get(key, True)
+            if not isinstance(value, bool):
+                raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
+            flags.append(value)
+        _effect_name(where, spec)
+        return (idx.tolist(), jdx.tolist(), law, tangent, where, *flags, initial, width)
 
     def _effect_array(self, i: int, spec: dict) -> "_core.EffectArray":
         """Many effects of one law: {"type": ..., "i": [...], "j": [...] (optional; -1: the ground; one

@@ -145,10 +145,16 @@ inline py::dict effect_parameters(const fx::Effect& e) {
 using LawSpec = std::tuple<std::vector<Index>, std::vector<double>, py::object, py::object, std::string, bool, bool,
                            std::vector<double>>;
 
+// vector_laws: (i, j (-1: the ground), law, tangent or None, where, uses_velocity, uses_time, initial states
+// (effect by effect), internal variables per effect) per vectorised Python law.
+using ArrayLawSpec = std::tuple<std::vector<Index>, std::vector<Index>, py::object, py::object, std::string, bool, bool,
+                                std::vector<double>, Index>;
+
 inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, const nvib::SparseMatrix& K,
                           const nvib::SparseMatrix& C,
                           py::object dofs, py::object force, py::object tangent, bool uses_velocity,
-                          bool uses_time, std::vector<LawSpec> laws, std::vector<fx::EffectArray> arrays) {
+                          bool uses_time, std::vector<LawSpec> laws, std::vector<fx::EffectArray> arrays,
+                          std::vector<ArrayLawSpec> vector_laws) {
   nvib::Mass ms = make_mass(mass, dof_namer(dofs));
   if (static_cast<Index>(py::len(dofs)) != ms.size())
     raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(py::len(dofs)));
@@ -157,7 +163,7 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
       if (a.i[k] >= ms.size() || a.j[k] >= ms.size())
         raise_value_error("arrays", "an effect array refers to DOF " + std::to_string(std::max(a.i[k], a.j[k])) +
                                         " of a model of " + std::to_string(ms.size()));
-  if (force.is_none() && laws.empty())  // assembly and compilation, C++ only: no GIL, Ctrl-C polled
+  if (force.is_none() && laws.empty() && vector_laws.empty())  // assembly and compilation, C++ only: no GIL
     return interruptible(false, [&] {
       return PyModel{fx::make_effect_model(std::move(ms), std::move(list), std::move(arrays), K, C), std::move(dofs)};
     });
@@ -173,6 +179,15 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
     for (Index i : index)
       if (i < 0 || i >= ms.size()) raise_value_error(where + ".measure", "DOF index " + std::to_string(i) + " is out of range");
     f.laws.push_back(PyLaw{index, coef, law, tan, where, vel, time, initial, 0});
+  }
+  for (auto& [i, j, law, tan, where, vel, time, initial, width] : vector_laws) {
+    if (i.size() != j.size() || i.empty()) raise_value_error(where + ".i", "i and j must be non-empty and equally long");
+    for (size_t k = 0; k < i.size(); ++k)
+      if (i[k] < 0 || i[k] >= ms.size() || j[k] < -1 || j[k] >= ms.size())
+        raise_value_error(where + ".i", "DOF index out of range at effect " + std::to_string(k));
+    if (initial.size() != i.size() * static_cast<size_t>(width))
+      raise_value_error(where + ".state", "expected " + std::to_string(width) + " internal variables per effect");
+    f.arrays.push_back(PyArrayLaw{i, j, law, tan, where, vel, time, initial, width, 0});
   }
   f.place_states();
   return PyModel{fx::make_effect_model_plus(std::move(ms), std::move(list), std::move(arrays), std::move(f), K, C),
@@ -358,7 +373,7 @@ inline void bind_models(py::module_& m) {
       .def(py::init(&make_model), py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"), py::arg("dofs"),
            py::arg("force") = py::none(), py::arg("tangent") = py::none(), py::arg("uses_velocity") = true,
            py::arg("uses_time") = true, py::arg("laws") = std::vector<LawSpec>{},
-           py::arg("arrays") = std::vector<fx::EffectArray>{})
+           py::arg("arrays") = std::vector<fx::EffectArray>{}, py::arg("vector_laws") = std::vector<ArrayLawSpec>{})
       .def_readonly("dofs", &PyModel::dofs)
       .def_property_readonly("has_python", &PyModel::python, "the model calls Python (the GIL is kept)")
       .def_property_readonly("size", [](const PyModel& p) { return p.visit([](auto& md) { return md.size(); }); })

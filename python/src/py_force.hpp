@@ -76,6 +76,29 @@ struct PyLaw {
   }
 };
 
+// Many effects of one Python law at once (a vectorised law): d_k = u[i_k] - u[j_k] (j_k < 0: the ground),
+// law(d, d', t) -> f with arrays of all the effects (one Python call per evaluation, not one per effect),
+// acting as +f_k on DOF i_k and -f_k on j_k; tangent(d, d', t) -> (df/dd, df/dd') arrays (None for a zero
+// df/dd'). With memory (width internal variables per effect): law(d, d', t, state) -> (f, trial state) and
+// tangent(d, d', t, state), state the committed one as an array (effects, width).
+struct PyArrayLaw {
+  std::vector<Index> i, j;
+  py::object law, tangent = py::none();
+  std::string where;
+  bool velocity = true, time = true;
+  std::vector<double> initial;  // the initial states, effect by effect (empty: no memory)
+  Index width = 0;              // internal variables per effect
+  size_t offset = 0;            // where its states sit in the state buffers
+
+  Index size() const { return static_cast<Index>(i.size()); }
+  py::array_t<double> measure(const CVecRef& x) const {
+    py::array_t<double> d(size());
+    double* p = d.mutable_data();
+    for (Index k = 0; k < size(); ++k) p[k] = x[i[k]] - (j[k] >= 0 ? x[j[k]] : 0.0);
+    return d;
+  }
+};
+
 // A real number returned by a callback (a Python number or a 0-d/1-element array).
 inline double checked_scalar(const py::handle& obj, const std::string& who, double t) {
   auto arr = checked_array(obj, who.c_str(), 1, 1, t);
@@ -100,17 +123,22 @@ struct PyForce {
   py::object force = py::none();    // force(u, v, t) -> (n,) or None
   py::object tangent_ = py::none();  // tangent(u, v, t) -> (K, C)
   std::vector<PyLaw> laws;
+  std::vector<PyArrayLaw> arrays;
   Index n = 0;
   bool velocity = true, time = true;  // of `force`
   std::vector<double> committed, trial;  // the states of the laws with memory (theirs, one after the other)
 
-  bool empty() const { return force.is_none() && laws.empty(); }
+  bool empty() const { return force.is_none() && laws.empty() && arrays.empty(); }
   // After the laws are set: their places in the state buffers.
   void place_states() {
     committed.clear();
     for (PyLaw& l : laws) {
       l.offset = committed.size();
       committed.insert(committed.end(), l.initial.begin(), l.initial.end());
+    }
+    for (PyArrayLaw& a : arrays) {
+      a.offset = committed.size();
+      committed.insert(committed.end(), a.initial.begin(), a.initial.end());
     }
     trial = committed;
   }
@@ -131,6 +159,48 @@ struct PyForce {
       if (!std::isfinite(f)) nonfinite(u, v, t, l.where + ".law");
       for (size_t k = 0; k < l.index.size(); ++k) out[l.index[k]] += l.coef[k] * f;
     }
+    for (const PyArrayLaw& a : arrays) {
+      auto f = respond(a, u, v, t, trial.data() + a.offset);
+      const double* fp = f.data();
+      for (Index k = 0; k < a.size(); ++k) {
+        if (!std::isfinite(fp[k])) nonfinite(u, v, t, a.where + ".law (effect " + std::to_string(k) + ")");
+        out[a.i[k]] += fp[k];
+        if (a.j[k] >= 0) out[a.j[k]] -= fp[k];
+      }
+    }
+  }
+  // A vectorised law at (u, v, t) from its committed states: its forces; with memory, its trial states
+  // written to `next`.
+  py::array_t<double> respond(const PyArrayLaw& a, const CVecRef& u, const CVecRef& v, double t, double* next) const {
+    const std::string who = a.where + ".law";
+    py::array_t<double> d = a.measure(u), dd = a.velocity ? a.measure(v) : py::array_t<double>(a.size());
+    if (!a.velocity) std::fill_n(dd.mutable_data(), a.size(), 0.0);
+    if (a.width == 0) return checked_array(a.law(d, dd, t), who.c_str(), a.size(), 1, t);
+    py::object r = a.law(d, dd, t, state_array(a));
+    if (!py::isinstance<py::tuple>(r) && !py::isinstance<py::list>(r))
+      throw py::type_error(who + " of a law with state must return (forces, states), got " +
+                           std::string(py::str(py::type::of(r).attr("__name__"))));
+    py::sequence fs = r;
+    if (py::len(fs) != 2) throw py::type_error(who + " of a law with state must return (forces, states), a pair");
+    auto f = checked_array(fs[0], (who + " (forces)").c_str(), a.size(), 1, t);
+    py::array s = py::array::ensure(fs[1]);
+    if (!s || s.ndim() != 2 || s.shape(0) != a.size() || s.shape(1) != a.width)
+      throw py::value_error(who + " returned states of shape " + (s ? shape_of(s) : std::string("?")) +
+                            ", expected (" + std::to_string(a.size()) + ", " + std::to_string(a.width) + ") at t = " +
+                            detail::fmt(t));
+    auto sd = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(s);
+    const double* sp = sd.data();
+    for (Index k = 0; k < a.size() * a.width; ++k) {
+      if (!std::isfinite(sp[k]))
+        throw py::value_error(who + " returned a non-finite state at t = " + detail::fmt(t));
+      next[k] = sp[k];
+    }
+    return f;
+  }
+  py::array_t<double> state_array(const PyArrayLaw& a) const {
+    py::array_t<double> s({a.size(), a.width});
+    std::copy_n(committed.data() + a.offset, static_cast<size_t>(a.size() * a.width), s.mutable_data());
+    return s;
   }
   // A law with memory at (d, d', t) from its committed state: its force, its trial state written to `next`.
   double respond(const PyLaw& l, double d, double dd, double t, double* next) const {
@@ -166,6 +236,8 @@ struct PyForce {
   void set_state(const double* x) { std::copy(x, x + committed.size(), committed.begin()); }
   void reset_state() {
     for (const PyLaw& l : laws) std::copy(l.initial.begin(), l.initial.end(), committed.begin() + static_cast<long>(l.offset));
+    for (const PyArrayLaw& a : arrays)
+      std::copy(a.initial.begin(), a.initial.end(), committed.begin() + static_cast<long>(a.offset));
   }
   void commit_last_trial(const double*, const double*, double) { committed.swap(trial); }
   void commit_at(const double* u, const double* v, double t) {
@@ -178,9 +250,17 @@ struct PyForce {
       }
       respond(l, d, dd, t, trial.data() + l.offset);
     }
+    for (const PyArrayLaw& a : arrays) {
+      if (a.width == 0) continue;
+      Eigen::Map<const Eigen::VectorXd> um(u, n), vm(v, n);
+      respond(a, um, vm, t, trial.data() + a.offset);
+    }
     for (const PyLaw& l : laws)
       std::copy(trial.begin() + static_cast<long>(l.offset), trial.begin() + static_cast<long>(l.offset + l.initial.size()),
                 committed.begin() + static_cast<long>(l.offset));
+    for (const PyArrayLaw& a : arrays)
+      std::copy(trial.begin() + static_cast<long>(a.offset),
+                trial.begin() + static_cast<long>(a.offset + a.initial.size()), committed.begin() + static_cast<long>(a.offset));
   }
   // Overflow of a diverging run is reported as divergence by the solver: a
   // state beyond the run's divergence bound (RunBound) or of size 1e30 or more
@@ -197,6 +277,8 @@ struct PyForce {
     if (!force.is_none() && tangent_.is_none()) return false;
     for (const PyLaw& l : laws)
       if (l.tangent.is_none()) return false;
+    for (const PyArrayLaw& a : arrays)
+      if (a.tangent.is_none()) return false;
     return true;
   }
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
@@ -216,6 +298,33 @@ struct PyForce {
           K(l.index[i], l.index[j]) += kd * l.coef[i] * l.coef[j];
           C(l.index[i], l.index[j]) += cd * l.coef[i] * l.coef[j];
         }
+    }
+    for (const PyArrayLaw& a : arrays) array_tangent(a, u, v, t, K, C);
+  }
+  // A vectorised law's slopes, each effect's as kd (g g^T) with g = e_i - e_j.
+  void array_tangent(const PyArrayLaw& a, const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) const {
+    const std::string who = a.where + ".tangent";
+    py::array_t<double> d = a.measure(u), dd = a.velocity ? a.measure(v) : py::array_t<double>(a.size());
+    if (!a.velocity) std::fill_n(dd.mutable_data(), a.size(), 0.0);
+    py::tuple kc = as_pair(a.width == 0 ? a.tangent(d, dd, t) : a.tangent(d, dd, t, state_array(a)), who);
+    auto kd = checked_array(kc[0], (who + " (df/dd)").c_str(), a.size(), 1, t);
+    py::array_t<double> cd;
+    if (!kc[1].is_none()) cd = checked_array(kc[1], (who + " (df/dd')").c_str(), a.size(), 1, t);
+    for (Index k = 0; k < a.size(); ++k) {
+      const double x = kd.data()[k], y = kc[1].is_none() ? 0.0 : cd.data()[k];
+      if (!std::isfinite(x) || !std::isfinite(y))
+        throw py::value_error(who + " returned non-finite values at t = " + detail::fmt(t));
+      const Index i = a.i[k], j = a.j[k];
+      K(i, i) += x;
+      C(i, i) += y;
+      if (j >= 0) {
+        K(j, j) += x;
+        K(i, j) -= x;
+        K(j, i) -= x;
+        C(j, j) += y;
+        C(i, j) -= y;
+        C(j, i) -= y;
+      }
     }
   }
   static py::tuple as_pair(const py::object& r, const std::string& who) {
@@ -241,11 +350,13 @@ struct PyForce {
   bool uses_velocity() const {
     bool any = !force.is_none() && velocity;
     for (const PyLaw& l : laws) any = any || l.velocity;
+    for (const PyArrayLaw& a : arrays) any = any || a.velocity;
     return any;
   }
   bool uses_time() const {
     bool any = !force.is_none() && time;
     for (const PyLaw& l : laws) any = any || l.time;
+    for (const PyArrayLaw& a : arrays) any = any || a.time;
     return any;
   }
   bool is_linear() const { return empty(); }  // (a model with memory is never linear: Model checks)
