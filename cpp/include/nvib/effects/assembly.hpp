@@ -25,12 +25,7 @@ class EffectsPlus {
  public:
   EffectsPlus() = default;
   EffectsPlus(EffectSet effects, Extra extra, Index n)
-      : effects_(std::move(effects)), extra_(std::move(extra)), work_(Vector::Zero(n)) {
-    if (!has_sparse_tangent() || n <= Mass::kDenseMax) {  // for the dense tangent (small models)
-      K2_.setZero(n, n);
-      C2_.setZero(n, n);
-    }
-  }
+      : effects_(std::move(effects)), extra_(std::move(extra)), work_(Vector::Zero(n)) {}
 
   const EffectSet& effects() const { return effects_; }
   EffectSet& effects() { return effects_; }
@@ -46,6 +41,10 @@ class EffectsPlus {
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) {
     effects_.tangent(u, v, t, K, C);
     if constexpr (traits::has_tangent_method<Extra>::value) {
+      if (K2_.rows() != K.rows()) {  // made at the first dense tangent: an explicit run never needs its n^2
+        K2_.setZero(K.rows(), K.cols());
+        C2_.setZero(C.rows(), C.cols());
+      }
       extra_.tangent(u, v, t, K2_, C2_);
       K += K2_;
       C += C2_;
