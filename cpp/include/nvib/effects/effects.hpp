@@ -8,3 +8,4 @@
 #include "law.hpp"
 #include "laws/all.hpp"
 #include "signal.hpp"
+#include "user_law.hpp"
