@@ -55,21 +55,58 @@ class LawCheck:
         return f"LawCheck({'ok' if self.ok else 'wrong slope'}, worst {self.worst[1]} error {self.worst[4]:.2g})"
 
 
+def _compiled_as_callable(effect: dict) -> dict:
+    """A compiled law's effect as the callable effect that calls it (through ctypes), to be checked alike."""
+    import ctypes
+
+    from . import _compiled
+
+    spec = _compiled.lower("effect", {**effect, "measure": {0: 1.0}})
+    fn = ctypes.CFUNCTYPE(*_compiled._CTYPES_SIGNATURE)(int(spec["address"]))
+    params = (ctypes.c_double * _compiled.MAX_PARAMS)(*[float(spec.get(f"p{k}", 0.0))
+                                                        for k in range(_compiled.MAX_PARAMS)])
+    width = int(spec.get("state_size", 0))
+    owner = effect["law"]  # the object the address lives in (a cfunc, a ctypes pointer): kept alive with the calls
+
+    def call(d, dd, t, state=(), _owner=owner):
+        out = (ctypes.c_double * 3)()
+        committed = (ctypes.c_double * _compiled.MAX_STATE)(*state)
+        trial = (ctypes.c_double * _compiled.MAX_STATE)(*state)
+        code = fn(params, committed if width else None, d, dd, t, out, trial if width else None)
+        if code != 0:
+            raise _checks.value_error("effect.law", f"the compiled law returned {code} (not 0) at d = {d:g}, "
+                                                    f"d' = {dd:g}, t = {t:g}")
+        return out, tuple(trial[:width])
+
+    if width:
+        law = lambda d, dd, t, s: (call(d, dd, t, s)[0][0], call(d, dd, t, s)[1])  # noqa: E731
+        tangent = lambda d, dd, t, s: tuple(call(d, dd, t, s)[0][1:3])  # noqa: E731
+        return {"type": "callable", "law": law, "tangent": tangent, "state": [spec[f"s{k}"] for k in range(width)]}
+    return {"type": "callable", "law": lambda d, dd, t: call(d, dd, t)[0][0],
+            "tangent": lambda d, dd, t: tuple(call(d, dd, t)[0][1:3])}
+
+
 def check_law(effect: dict, d, *, rate=None, t=None, step: float = 1e-6, tolerance: float = 1e-4) -> LawCheck:
-    """Check the slopes a Python law declares (its ``tangent``) against central finite differences of its
-    force along the path ``d`` (rates ``rate``, times ``t``; zero by default). ``effect`` is a callable
-    effect's dict without its measure: ``{"type": "callable", "law": f, "tangent": g}`` (and ``"state"``, the
+    """Check the slopes a user's law declares against central finite differences of its force along the
+    path ``d`` (rates ``rate``, times ``t``; zero by default). ``effect`` is the law's effect dict without
+    its measure: a Python law, ``{"type": "callable", "law": f, "tangent": g}`` (and ``"state"``, the
     initial internal variables, for a law with memory: each point is then a trial from the state the path
-    has committed so far, as in a run). The difference steps are ``step`` times the largest |d| (and
+    has committed so far, as in a run), or a compiled one, ``{"type": "compiled", "law": cfunc, "params":
+    [...], "state": [...]}`` (its slopes are the out[1], out[2] it writes). The difference steps are ``step`` times the largest |d| (and
     |d'|) of the path; a slope is wrong where it differs from the difference by more than ``tolerance``
     (relative). Returns a ``LawCheck``; ``print`` it for the worst point."""
     if not isinstance(effect, dict):
         raise _checks.type_error("effect", f"expected a callable effect's dict {{'type': 'callable', 'law': f, "
                                            f"'tangent': g}}, got {type(effect).__name__}")
+    if effect.get("type") == "compiled" and "law" in effect:
+        if "measure" in effect:
+            raise _checks.value_error("effect.measure", "check_law takes the law alone (d is its measure)")
+        effect = _compiled_as_callable(effect)
     if effect.get("type") != "callable":
-        raise _checks.value_error("effect.type", "check_law checks a Python law ({'type': 'callable', ...}); the "
-                                                 "built-in laws' tangents are checked by nvib's own tests "
-                                                 f"(nvib.drive shows them), got {effect.get('type')!r}")
+        raise _checks.value_error("effect.type", "check_law checks a user's law ({'type': 'callable', ...} or "
+                                                 "{'type': 'compiled', 'law': ...}); the built-in laws' tangents "
+                                                 "are checked by nvib's own tests (nvib.drive shows them), got "
+                                                 f"{effect.get('type')!r}")
     for key in effect:
         if key not in ("type", "law", "tangent", "state", "uses_velocity", "uses_time", "name", "note"):
             raise _checks.value_error(f"effect.{key}", "check_law takes the law alone (d is its measure): expected "

@@ -106,3 +106,30 @@ def test_bad_input_names_the_argument(effect, d, arg):
     with pytest.raises((nvib.ArgumentError, nvib.ArgumentTypeError)) as exc:
         nvib.check_law(effect, d)
     assert exc.value.argument == arg
+
+
+def test_a_compiled_law_is_checked_through_its_pointer():
+    """The same check for a compiled law (here a ctypes pointer of nvib.LAW_SIGNATURE: no compiler needed):
+    its declared out[1] against differences of its out[0], from the state the path commits."""
+    from _compiled_laws import BILINEAR, HARDENING
+
+    path = 0.03 * np.sin(np.linspace(0, 4 * np.pi, 200))
+    # k0 (1 + a d^2) d with k0 = K, a = A / K: the spring K d + A d^3 of the tests above
+    good = nvib.check_law({"type": "compiled", "law": HARDENING, "params": [K, A / K], "uses_time": False}, PATH)
+    assert good.ok and good.worst[4] < 1e-6
+    memory = nvib.check_law({"type": "compiled", "law": BILINEAR, "params": [1000.0, 10.0, 0.05],
+                             "state": [0.0, 0.0, 0.0]}, path)
+    assert memory.ok and np.any(memory.slope_d < 1000.0)  # it yields: the slope b k there, found right
+    # a wrong slope planted: the bilinear law's arithmetic with its elastic slope everywhere
+    from nvib._compiled import ctypes_law
+    from _compiled_laws import bilinear_py
+
+    def elastic_slope(p, s, d, dd, t, out, trial):
+        code = bilinear_py(p, s, d, dd, t, out, trial)
+        out[1] = p[0]
+        return code
+
+    wrong = nvib.check_law({"type": "compiled", "law": ctypes_law(elastic_slope), "params": [1000.0, 10.0, 0.05],
+                            "state": [0.0, 0.0, 0.0]}, path)
+    k, which, declared, fd, err = wrong.worst
+    assert not wrong.ok and declared == 1000.0 and fd == pytest.approx(50.0, rel=1e-6)

@@ -85,7 +85,7 @@ def two_bilinear_storeys(vectorised: bool) -> nvib.Model:
 def test_a_vectorised_law_with_memory_follows_the_built_in_one(sch):
     a = nvib.solve(two_bilinear_storeys(False), sch, dt=2e-3, t_end=1.5)
     b = nvib.solve(two_bilinear_storeys(True), sch, dt=2e-3, t_end=1.5)
-    close(a, b, 1e-11)
+    close(a, b)  # measured 6e-17 (LCDM) to 7.4e-15 (generalized-alpha) of the peak
     assert np.max(np.abs(a.u)) > 3 * FY / K  # it yields
 
 
