@@ -60,9 +60,13 @@ def address_of(where: str, law) -> int:
     elif isinstance(law, ctypes._CFuncPtr):
         address = int(ctypes.cast(law, ctypes.c_void_p).value or 0)
     else:
+        import importlib.util
+
+        how = ("compile it with numba.cfunc(nvib.LAW_SIGNATURE)" if importlib.util.find_spec("numba") else
+               'compile it with Numba (pip install "nvib[numba]"), numba.cfunc(nvib.LAW_SIGNATURE)')
         raise _checks.type_error(where, "expected a compiled function: a Numba cfunc of nvib.LAW_SIGNATURE, a "
                                         "scipy.LowLevelCallable, a ctypes function pointer or its address (an int); "
-                                        f"got {type(law).__name__} (a Python function is a 'callable' effect)")
+                                        f"got {type(law).__name__}: {how}, or give it as a 'callable' effect")
     if not 0 < address < 2 ** 53:
         raise _checks.value_error(where, f"not a function's address: {address}")
     return address

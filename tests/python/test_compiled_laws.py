@@ -222,3 +222,14 @@ def test_a_law_given_by_its_address_stays_in_its_process():
         nvib.solve_many(model, nvib.Newmark(), threads=2, processes=True, **run)
     assert exc.value.argument == "models.effects[0].law" and "by its address" in str(exc.value)
     assert not nvib.solve_many(model, nvib.Newmark(), threads=2, **run).failed
+
+
+def test_a_python_function_given_as_a_compiled_law_says_how_to_compile_it(monkeypatch):
+    import importlib.util
+
+    spec = {"type": "compiled", "measure": {0: 1.0}, "law": hardening_py, "params": [1.0, 0.0]}
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "numba" else real(name, *a))
+    with pytest.raises(nvib.ArgumentTypeError) as exc:
+        nvib.Model([1.0], effects=[spec])
+    assert exc.value.argument == "effects[0].law" and 'pip install "nvib[numba]"' in str(exc.value)
