@@ -369,13 +369,9 @@ class Model:
         if tangent is not None and not callable(tangent):
             raise _checks.type_error(f"{where}.tangent", f"expected a callable tangent(d, dd, t) -> (df/dd, df/ddd), "
                                                          f"got {type(tangent).__name__}")
-        idx = self._dof_array(f"{where}.i", spec["i"], ground=False)
-        jspec = spec.get("j", -1)
-        if isinstance(jspec, (str, numbers.Integral)) and not isinstance(jspec, bool):
-            jspec = [jspec] * idx.size
-        jdx = self._dof_array(f"{where}.j", jspec, ground=True)
-        if jdx.shape != idx.shape:
-            raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
+        idx, jdx = self._array_ends(where, spec)
+        if jdx is None:
+            jdx = np.full(idx.size, -1, dtype=np.int32)  # every effect to the ground
         initial, width = [], 0
         if spec.get("state") is not None:
             state = _checks.real_array(f"{where}.state", spec["state"])
@@ -407,13 +403,8 @@ class Model:
             if key not in ("type", "i", "j", "name", "note") and key not in required and key not in optional:
                 raise _checks.value_error(f"{where}.{key}", f"unknown parameter of {kind} "
                                                             f"(expected i, j, {', '.join(required + tuple(optional))})")
-        idx = self._dof_array(f"{where}.i", spec["i"], ground=False)
-        jspec = spec.get("j")
-        if isinstance(jspec, (str, numbers.Integral)) and not isinstance(jspec, bool):
-            jspec = [jspec] * idx.size  # one DOF (or -1, the ground) for every effect of the array
-        jdx = self._dof_array(f"{where}.j", jspec, ground=True) if jspec is not None else None
-        if jdx is not None and jdx.shape != idx.shape:
-            raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
+        idx, jdx = self._array_ends(where, spec)
+
         def per_effect(arg: str, value) -> np.ndarray:
             arr = _checks.real_array(arg, value)
             if arr.ndim > 1 or (arr.ndim == 1 and arr.size not in (1, idx.size)):
@@ -427,6 +418,18 @@ class Model:
                                      self.n, name=name, **signal)
         except ArgumentError as exc:  # names the parameter or entry: make it effects[i].<it>
             raise _checks.value_error(f"{where}.{exc.argument}", exc.reason) from None
+
+    def _array_ends(self, where: str, spec: dict):
+        """The DOFs an array's effects join, i and j (None when not given; one DOF or -1, the ground, for
+        every effect), checked."""
+        idx = self._dof_array(f"{where}.i", spec["i"], ground=False)
+        jspec = spec.get("j")
+        if isinstance(jspec, (str, numbers.Integral)) and not isinstance(jspec, bool):
+            jspec = [jspec] * idx.size
+        jdx = self._dof_array(f"{where}.j", jspec, ground=True) if jspec is not None else None
+        if jdx is not None and jdx.shape != idx.shape:
+            raise _checks.value_error(f"{where}.j", f"expected {idx.size} entries (as many as i), got {jdx.size}")
+        return idx, jdx
 
     def _dof_array(self, where: str, values, *, ground: bool) -> np.ndarray:
         """DOF indices (int32) from integers or DOF names; -1 (the ground) where ``ground``."""

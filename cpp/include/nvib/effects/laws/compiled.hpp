@@ -45,6 +45,12 @@ inline CompiledLawFn function_at(double a) {
   throw std::runtime_error("a compiled law returned " + std::to_string(code) + " (not 0) at d = " + detail::fmt(d) +
                            ", d' = " + detail::fmt(dd) + ", t = " + detail::fmt(t));
 }
+// One call: out = {f, df/dd, df/dd'} (and the trial state, with memory); a code other than 0 stops the run.
+inline void call(CompiledLawFn fn, const double* p, const double* state, double d, double dd, double t, double* out,
+                 double* trial) {
+  const int code = fn(p, state, d, dd, t, out, trial);
+  if (code != 0) fail(code, d, dd, t);
+}
 
 }  // namespace detail_compiled
 
@@ -83,14 +89,12 @@ struct Compiled : CompiledLawBase {
   }
   static Slopes slopes(const Params& p, double d, double dd, double t) {
     double out[3] = {0.0, 0.0, 0.0};
-    const int code = p.fn(p.p, nullptr, d, dd, t, out, nullptr);
-    if (code != 0) detail_compiled::fail(code, d, dd, t);
+    detail_compiled::call(p.fn, p.p, nullptr, d, dd, t, out, nullptr);
     return {out[1], out[2]};
   }
   static double value(const Params& p, double d, double dd, double t) {
     double out[3] = {0.0, 0.0, 0.0};
-    const int code = p.fn(p.p, nullptr, d, dd, t, out, nullptr);
-    if (code != 0) detail_compiled::fail(code, d, dd, t);
+    detail_compiled::call(p.fn, p.p, nullptr, d, dd, t, out, nullptr);
     return out[0];
   }
 };
@@ -141,8 +145,7 @@ struct CompiledState : CompiledLawBase {
   static Trial<State> trial(const Params& p, const State& c, double d, double dd, double t) {
     Trial<State> r{0.0, 0.0, 0.0, c};
     double out[3] = {0.0, 0.0, 0.0};
-    const int code = p.fn(p.p, c.s, d, dd, t, out, r.state.s);
-    if (code != 0) detail_compiled::fail(code, d, dd, t);
+    detail_compiled::call(p.fn, p.p, c.s, d, dd, t, out, r.state.s);
     r.f = out[0];
     r.kd = out[1];
     r.kv = out[2];
