@@ -79,7 +79,10 @@ def _compiled_as_callable(effect: dict) -> dict:
         return out, tuple(trial[:width])
 
     if width:
-        law = lambda d, dd, t, s: (call(d, dd, t, s)[0][0], call(d, dd, t, s)[1])  # noqa: E731
+        def law(d, dd, t, s):
+            out, trial = call(d, dd, t, s)
+            return out[0], trial
+
         tangent = lambda d, dd, t, s: tuple(call(d, dd, t, s)[0][1:3])  # noqa: E731
         return {"type": "callable", "law": law, "tangent": tangent, "state": [spec[f"s{k}"] for k in range(width)]}
     return {"type": "callable", "law": lambda d, dd, t: call(d, dd, t)[0][0],

@@ -91,6 +91,17 @@ def _law_parameters(where: str, kind: str, spec: dict, convert) -> tuple[dict, d
     return params, signal
 
 
+def _python_law_flags(where: str, spec: dict) -> list:
+    """A Python law's declared uses_velocity and uses_time (True unless said otherwise), checked."""
+    flags = []
+    for key in ("uses_velocity", "uses_time"):
+        value = spec.get(key, True)
+        if not isinstance(value, bool):
+            raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
+        flags.append(value)
+    return flags
+
+
 def _effect_name(where: str, spec: dict) -> str:
     name = spec.get("name", "")
     if not isinstance(name, str):
@@ -341,12 +352,7 @@ class Model:
             raise _checks.value_error(f"{where}.measure", "expected a non-empty mapping DOF -> coefficient")
         index = [self._dof_index(f"{where}.measure", k) for k in measure]
         coef = [_checks.real(f"{where}.measure[{k!r}]", c) for k, c in measure.items()]
-        flags = []
-        for key in ("uses_velocity", "uses_time"):
-            value = spec.get(key, True)
-            if not isinstance(value, bool):
-                raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
-            flags.append(value)
+        flags = _python_law_flags(where, spec)
         _effect_name(where, spec)
         return (index, coef, law, tangent, where, *flags, initial)
 
@@ -381,12 +387,7 @@ class Model:
                 raise _checks.value_error(f"{where}.state", f"expected the initial internal variables: one row for "
                                                             f"every effect, or {idx.size} rows (one per effect)")
             initial, width = np.ascontiguousarray(state).reshape(-1).tolist(), state.shape[1]
-        flags = []
-        for key in ("uses_velocity", "uses_time"):
-            value = spec.get(key, True)
-            if not isinstance(value, bool):
-                raise _checks.type_error(f"{where}.{key}", f"expected True or False, got {value!r}")
-            flags.append(value)
+        flags = _python_law_flags(where, spec)
         _effect_name(where, spec)
         return (idx.tolist(), jdx.tolist(), law, tangent, where, *flags, initial, width)
 

@@ -97,6 +97,13 @@ struct PyArrayLaw {
     for (Index k = 0; k < size(); ++k) p[k] = x[i[k]] - (j[k] >= 0 ? x[j[k]] : 0.0);
     return d;
   }
+  // d' of every effect: the measure of v, or zeros for a law declared without velocity.
+  py::array_t<double> rates(const CVecRef& v) const {
+    if (velocity) return measure(v);
+    py::array_t<double> dd(size());
+    std::fill_n(dd.mutable_data(), size(), 0.0);
+    return dd;
+  }
 };
 
 // A real number returned by a callback (a Python number or a 0-d/1-element array).
@@ -173,8 +180,7 @@ struct PyForce {
   // written to `next`.
   py::array_t<double> respond(const PyArrayLaw& a, const CVecRef& u, const CVecRef& v, double t, double* next) const {
     const std::string who = a.where + ".law";
-    py::array_t<double> d = a.measure(u), dd = a.velocity ? a.measure(v) : py::array_t<double>(a.size());
-    if (!a.velocity) std::fill_n(dd.mutable_data(), a.size(), 0.0);
+    py::array_t<double> d = a.measure(u), dd = a.rates(v);
     if (a.width == 0) return checked_array(a.law(d, dd, t), who.c_str(), a.size(), 1, t);
     py::object r = a.law(d, dd, t, state_array(a));
     if (!py::isinstance<py::tuple>(r) && !py::isinstance<py::list>(r))
@@ -304,8 +310,7 @@ struct PyForce {
   // A vectorised law's slopes, each effect's as kd (g g^T) with g = e_i - e_j.
   void array_tangent(const PyArrayLaw& a, const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) const {
     const std::string who = a.where + ".tangent";
-    py::array_t<double> d = a.measure(u), dd = a.velocity ? a.measure(v) : py::array_t<double>(a.size());
-    if (!a.velocity) std::fill_n(dd.mutable_data(), a.size(), 0.0);
+    py::array_t<double> d = a.measure(u), dd = a.rates(v);
     py::tuple kc = as_pair(a.width == 0 ? a.tangent(d, dd, t) : a.tangent(d, dd, t, state_array(a)), who);
     auto kd = checked_array(kc[0], (who + " (df/dd)").c_str(), a.size(), 1, t);
     py::array_t<double> cd;

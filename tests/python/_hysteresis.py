@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from scipy.integrate import solve_ivp
 
 import nvib
@@ -207,3 +208,14 @@ def bilinear_reference(t, *, m, k, fy, b, ag) -> np.ndarray:
 
 def ground_sine(amplitude: float, omega: float):
     return lambda time: amplitude * math.sin(omega * time)
+
+
+def step_until_it_fails(st, limit=5000):
+    """Steps until one fails: the state, time and index before it."""
+    for _ in range(limit):
+        before, t, k = st.state(), st.t, st.step_index
+        try:
+            st.step()
+        except nvib.ConvergenceError:
+            return before, t, k
+    pytest.fail("no step failed")

@@ -13,7 +13,8 @@ import pytest
 
 import nvib
 
-from _hysteresis import LAW_CASES, MEMORY_NAMES, SCHEME_IDS, chain, law_type, laws_with_memory, memory_chain, scheme
+from _hysteresis import (LAW_CASES, MEMORY_NAMES, SCHEME_IDS, chain, law_type, laws_with_memory, memory_chain, scheme,
+                         step_until_it_fails)
 
 MEMORY_CASES = [c for c in LAW_CASES if law_type(c) in laws_with_memory()]
 
@@ -59,17 +60,6 @@ def _enough(sch):
     if isinstance(sch, nvib.Newmark):
         return nvib.Newmark(newton=nvib.Newton(iteration=sch.newton.iteration))
     return nvib.GeneralizedAlpha(sch.alpha_m, sch.alpha_f, sch.beta, sch.gamma)
-
-
-def step_until_it_fails(st, limit=5000):
-    """Steps until one fails: the state, time and index before it."""
-    for _ in range(limit):
-        before, t, k = st.state(), st.t, st.step_index
-        try:
-            st.step()
-        except nvib.ConvergenceError:
-            return before, t, k
-    pytest.fail("no step failed")
 
 
 def check_the_failed_step_changed_nothing(st, before, t, k, model):
