@@ -99,7 +99,7 @@ inline py::dict stats_dict(const nvib::Stats& s) {
 
 // Stats::linear_solver points at a static name: the one a pickled name stands for.
 inline const char* linear_solver_name(const std::string& s) {
-  for (const char* known : {"dense LU", "sparse LDLT", "sparse LU"})
+  for (const char* known : nvib::kLinearSolverNames)
     if (s == known) return known;
   if (s.empty()) return "";
   raise_value_error("linear_solver", "unknown linear solver '" + s + "'");
@@ -169,7 +169,7 @@ inline void bind_types(py::module_& m) {
   });
   stats.def_readonly("wall_time", &Stats::wall_time, "seconds")
       .def_property_readonly("linear_solver", [](const Stats& s) { return std::string(s.linear_solver); },
-                             "the implicit schemes' linear solver: 'dense LU', 'sparse LDLT' or 'sparse LU' ('' if none)")
+                             "the implicit schemes' linear solver: 'dense LU', 'banded LDLT', 'sparse LDLT' or 'sparse LU' ('' if none)")
       .def("as_dict", &stats_dict)
       .def(py::pickle(
           [](const Stats& s) {  // the counters in order, then wall_time and linear_solver

@@ -2,8 +2,12 @@
 // DenseLU (the implicit schemes' factorisation) against Eigen's PartialPivLU:
 // solutions of random systems on both sides of the unblocked/blocked switch,
 // pivoting on a zero diagonal, and singular or non-finite matrices refused.
+// BandedLDLT: random symmetric band matrices of every half-width against a dense
+// solve, the tridiagonal case bit for bit against DenseLU, and pivots it cannot
+// take without an exchange (zero, non-finite) refused.
 // expm_increment_with_moments (PIM's propagators) against the 2^N exponential
 // of the whole block matrix it avoids forming.
+#include <nvib/linalg/banded_ldlt.hpp>
 #include <nvib/linalg/dense_lu.hpp>
 #include <nvib/linalg/expm.hpp>
 
@@ -69,6 +73,60 @@ int main() {
       Matrix S = random_matrix(n);
       S.col(3) = S.col(1);
       CHECK(!big.compute(S));
+    }
+  }
+  // BandedLDLT: symmetric band matrices, diagonally dominant (as c_M M + c_K K) or merely positive definite
+  auto band = [&](Index n, Index b, double dominance) {
+    Matrix A = Matrix::Zero(n, n);
+    for (Index i = 0; i < n; ++i)
+      for (Index j = std::max<Index>(0, i - b); j < i; ++j) A(i, j) = A(j, i) = normal(gen);
+    for (Index i = 0; i < n; ++i) A(i, i) = dominance * (1.0 + std::abs(normal(gen))) + A.row(i).cwiseAbs().sum();
+    return A;
+  };
+  auto factorise = [](nvib::BandedLDLT& ldlt, const Matrix& A) {
+    const nvib::SparseMatrix S = A.sparseView(1.0, 0.0);
+    ldlt.analyze(S);
+    std::vector<double> values(static_cast<size_t>(ldlt.size()) + 1, 0.0);  // + 1: where the upper triangle goes
+    const std::vector<int> to = ldlt.layout(S);
+    for (Index k = 0; k < S.nonZeros(); ++k) values[to[k] >= 0 ? to[k] : ldlt.size()] += S.valuePtr()[k];
+    return ldlt.factorize(values.data());
+  };
+  for (Index n : {1, 2, 3, 7, 40}) {
+    for (Index b : {0, 1, 2, 3, 4, 7}) {
+      if (b >= n && b > 0) continue;
+      for (double dominance : {1e3, 0.01}) {
+        const Matrix A = band(n, b, dominance);
+        nvib::BandedLDLT ldlt;
+        CHECK(factorise(ldlt, A));
+        CHECK(ldlt.half_bandwidth() == b || (b == 0 && ldlt.half_bandwidth() == 0));
+        Vector rhs(n), x(n);
+        for (Index i = 0; i < n; ++i) rhs[i] = normal(gen);
+        x = rhs;
+        ldlt.solve_in_place(x.data());
+        CHECK((A * x - rhs).cwiseAbs().maxCoeff() <= 1e-12 * A.cwiseAbs().maxCoeff() * std::max(1.0, x.cwiseAbs().maxCoeff()));
+        if (b == 1 && dominance > 1.0) {  // tridiagonal, no row exchange: the dense LU's bits
+          nvib::DenseLU lu(n);
+          CHECK(lu.compute(A));
+          Vector y = rhs;
+          lu.solve_in_place(y);
+          CHECK((x - y).cwiseAbs().maxCoeff() == 0.0);
+        }
+      }
+    }
+  }
+  {  // pivots without an exchange: a zero one (A(0, 0) = 0 of a regular matrix), a non-finite one, a tiny one
+    Matrix A(2, 2);
+    A << 0, 1, 1, 2;
+    nvib::BandedLDLT ldlt;
+    CHECK(!factorise(ldlt, A));
+    A << 1, 1, 1, std::numeric_limits<double>::infinity();
+    CHECK(!factorise(ldlt, A));
+    A << 1, 1, 1, 1 + 1e-15;  // the second pivot 1e-15 of the first (the dense LU's 1e-14 test)
+    CHECK(!factorise(ldlt, A));
+    for (Index b : {1, 5}) {  // NaN in the general path too
+      Matrix B = band(8, b, 10.0);
+      B(3, 3) = std::numeric_limits<double>::quiet_NaN();
+      CHECK(!factorise(ldlt, B));
     }
   }
   // PIM's moments: the structured first block row equals the full block exponential

@@ -79,7 +79,7 @@ void all_schemes(const std::string& label, const ModelT& model) {
 }
 
 // Laws with memory on a sparse tangent: every scheme and variant, the implicit ones with the sparse
-// linear solver forced (and checked to be the one used). Each step evaluates trials (the return
+// and the banded linear solvers forced (and checked to be the one used). Each step evaluates trials (the return
 // mappings, Bouc-Wen's adaptive Runge-Kutta flow, the IMK branches) and commits one per accepted step
 // (a swap of the trial and committed buffers, or a new trial at the end of a generalized-alpha step).
 template <class ModelT>
@@ -90,17 +90,19 @@ void hysteretic_schemes(const std::string& label, const ModelT& model, const nvi
   });
   check_no_alloc((label + " CentralDifference(half_step)").c_str(),
                  nvib::CentralDifference(nvib::CentralDifference::Velocity::half_step), model, &u0);
-  for (auto m : {nvib::NewtonMode::newton, nvib::NewtonMode::modified, nvib::NewtonMode::initial,
-                 nvib::NewtonMode::incremental, nvib::NewtonMode::one_iteration}) {
-    nvib::Newton nw = mode(m);
-    nw.linear_solver = nvib::LinearSolverChoice::sparse;
-    const nvib::Newmark nm(0.25, 0.5, nw);
-    check_no_alloc((label + " Newmark sparse " + nvib::to_string(m)).c_str(), nm, model, &u0);
-    auto st = nvib::make_stepper(nm, model, 1e-3);
-    st.initialize(0.0, u0, nvib::Vector::Zero(model.size()));
-    st.step();
-    CHECK(std::string(st.stats().linear_solver).find("sparse") == 0);
-  }
+  for (auto choice : {nvib::LinearSolverChoice::sparse, nvib::LinearSolverChoice::banded})
+    for (auto m : {nvib::NewtonMode::newton, nvib::NewtonMode::modified, nvib::NewtonMode::initial,
+                   nvib::NewtonMode::incremental, nvib::NewtonMode::one_iteration}) {
+      nvib::Newton nw = mode(m);
+      nw.linear_solver = choice;
+      const nvib::Newmark nm(0.25, 0.5, nw);
+      const std::string solver = nvib::to_string(choice);
+      check_no_alloc((label + " Newmark " + solver + " " + nvib::to_string(m)).c_str(), nm, model, &u0);
+      auto st = nvib::make_stepper(nm, model, 1e-3);
+      st.initialize(0.0, u0, nvib::Vector::Zero(model.size()));
+      st.step();
+      CHECK(std::string(st.stats().linear_solver).find(solver) == 0);
+    }
   nvib::Newton nw;
   nw.linear_solver = nvib::LinearSolverChoice::sparse;
   nvib::GeneralizedAlpha ga;  // alpha_f = 1/2: the end state gets a trial of its own at the commit

@@ -147,14 +147,33 @@ int main() {
     same_with_both_solvers(("GeneralizedAlpha(rho 0.8), chain, " + m).c_str(), model,
                            nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::dense)),
                            nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::sparse)), "sparse LDLT");
+    same_with_both_solvers(("Newmark, chain, " + m).c_str(), model, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::dense)),
+                           nvib::Newmark(0.25, 0.5, with_solver(mode, LS::banded)), "banded LDLT");
+    // Up to 64 DOFs (the dense LU's unblocked elimination) the band of a chain (diagonally dominant: no
+    // row exchanges) is factorised in the dense LU's arithmetic from an S assembled in the dense
+    // assembly's order: the same bits.
+    const auto small = fx::make_effect_model(nvib::Mass::diagonal(Vector::LinSpaced(40, 1.0, 2.0)), chain(40));
+    same_with_both_solvers(("Newmark, chain of 40, " + m).c_str(), small, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::dense)),
+                           nvib::Newmark(0.25, 0.5, with_solver(mode, LS::banded)), "banded LDLT", 0.0);
+    same_with_both_solvers(("GeneralizedAlpha(rho 0.8), chain of 40, " + m).c_str(), small,
+                           nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::dense)),
+                           nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::banded)), "banded LDLT", 0.0);
   }
-  // The automatic choice: sparse above 64 DOFs for this (banded) pattern, dense below.
+  // The automatic choice: a chain's band at every size; a long-range coupling spoils the band: dense LU
+  // up to 64 DOFs, sparse LDL^T above.
   {
     const Vector u0 = Vector::Zero(n), v0 = Vector::Zero(n);
-    CHECK(std::string(nvib::solve(model, nvib::Newmark(), 1e-3, 0.01, u0, v0).stats.linear_solver) == "sparse LDLT");
+    CHECK(std::string(nvib::solve(model, nvib::Newmark(), 1e-3, 0.01, u0, v0).stats.linear_solver) == "banded LDLT");
     const auto small = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(10)), chain(10));
     CHECK(std::string(nvib::solve(small, nvib::Newmark(), 1e-3, 0.01, Vector::Zero(10), Vector::Zero(10))
-                          .stats.linear_solver) == "dense LU");
+                          .stats.linear_solver) == "banded LDLT");
+    for (Index size : {Index(10), n}) {
+      auto list = chain(size);
+      list.push_back(fx::hardening_spring({{0, 1.0}, {size - 1, -1.0}}, 1e3, 5.0));  // end to end
+      const auto ring = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(size)), std::move(list));
+      CHECK(std::string(nvib::solve(ring, nvib::Newmark(), 1e-3, 0.01, Vector::Zero(size), Vector::Zero(size))
+                            .stats.linear_solver) == (size <= 64 ? "dense LU" : "sparse LDLT"));
+    }
   }
   // A nonsymmetric linear stiffness (a follower-type coupling): sparse LU.
   {
@@ -184,7 +203,7 @@ int main() {
     const auto d = nvib::solve(md, nvib::Newmark(0.25, 0.5, with_solver(Mode::newton, LS::dense)), 1e-3, 0.2, u0, v0);
     std::printf("consistent mass, sparse vs dense, Newmark (%s vs %s): u %.1e\n", c.stats.linear_solver,
                 d.stats.linear_solver, rel_diff(c.u, d.u));
-    CHECK(std::string(c.stats.linear_solver) == "sparse LDLT");
+    CHECK(std::string(c.stats.linear_solver) == "banded LDLT");  // a tridiagonal mass keeps the band
     CHECK(rel_diff(c.u, d.u) <= 1e-12 && rel_diff(c.v, d.v) <= 1e-12);
     // A mass with only diagonal entries given as sparse is lumped.
     SparseMatrix Dg(3, 3);

@@ -204,5 +204,5 @@ def test_stats_as_dict():
     for k, v in d.items():
         assert v == getattr(s, k)
     assert d["wall_time"] >= 0.0
-    assert d["linear_solver"] == "dense LU"  # one DOF
+    assert d["linear_solver"] == "banded LDLT"  # one DOF: a band of width 0
     assert nvib.solve(effect_model(True), nvib.CEMDTS(), dt=DT, t_end=T_END).stats.linear_solver == ""

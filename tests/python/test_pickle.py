@@ -82,7 +82,7 @@ def test_result_stats_and_failure_round_trip():
             np.testing.assert_array_equal(getattr(other, key), getattr(res, key))
         np.testing.assert_array_equal(other.energy.balance_error, res.energy.balance_error)
         assert other.dofs == res.dofs and other.dof_indices == res.dof_indices
-        assert other.stats.as_dict() == res.stats.as_dict() and other.stats.linear_solver == "dense LU"
+        assert other.stats.as_dict() == res.stats.as_dict() and other.stats.linear_solver == "banded LDLT"
         assert other.status == res.status and other.failure is None
         assert other.max_residual == res.max_residual and other.dt == res.dt and repr(other.scheme) == repr(res.scheme)
 

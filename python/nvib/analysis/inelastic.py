@@ -353,19 +353,6 @@ def _check_fy_ratios(fy_ratios) -> np.ndarray:
     return np.unique(np.concatenate([x, [1.0]]))[::-1]  # from the elastic strength down
 
 
-def _for_independent_sdofs(scheme):
-    """The scheme with a sparse linear solver when it left the choice to the solver: the SDOFs run together
-    are independent, their tangent diagonal, and the dense LU the automatic choice takes below 64 DOFs
-    costs O(n^3) per factorisation."""
-    state = scheme.__getstate__()
-    newton = state.get("newton")
-    if newton is None or newton.linear_solver != "auto":
-        return scheme
-    from .._schemes import Newton
-
-    return type(scheme)(**{**state, "newton": Newton(**{**newton.__getstate__(), "linear_solver": "sparse"})})
-
-
 # ---- the runs ---------------------------------------------------------------------------------------
 
 class _Runs:
@@ -375,7 +362,7 @@ class _Runs:
 
     def __init__(self, record, periods, law, damping, scheme, threads, rdt):
         self.record, self.periods, self.law, self.damping = record, periods, law, damping
-        self.scheme, self.threads, self.rdt = _for_independent_sdofs(scheme), threads, rdt
+        self.scheme, self.threads, self.rdt = scheme, threads, rdt
         self.record_end = float(record.t[-1])
         self.k = (2.0 * np.pi / periods) ** 2  # the initial stiffness, m = 1
         self.collapsible = "failed" in _laws()[law["type"]]["state"]  # a law that can lose its strength

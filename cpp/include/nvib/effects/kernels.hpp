@@ -329,10 +329,39 @@ void tangent_entries(const Group& g, std::vector<Entry>& K, std::vector<Entry>& 
 }
 
 // Their values: df/dd g_i g_j (and df/dd' g_i g_j), advancing K and C past the group's entries.
+// The storages of one DOF or a difference of two (every storey spring, every array) with the storage
+// known at compile time, as add_forces: the entries written straight, (i, i), (i, j), (j, i), (j, j),
+// with g = (1, -1) (the same values as x gi gj, which is exact for gi, gj = +-1).
+template <class L, Storage S>
+void two_entry_tangent_values(const Group& g, const double* u, const double* v, double t, double*& K, double*& C,
+                              const double* committed) {
+  for (std::size_t k = 0; k < g.size; ++k) {
+    double d, dd;
+    measures_of<L, S>(g, k, u, v, d, dd);
+    const Slopes s = law::slopes<L>(g.params_of<L>(k), g.state_of<L>(committed, k), d, dd, t);
+    const bool paired = S == pair || (S == mixed && g.j[k] >= 0);
+    auto write = [&](double*& out, double x) {
+      *out++ = x;
+      if (paired) {
+        *out++ = -x;
+        *out++ = -x;
+        *out++ = x;
+      }
+    };
+    if constexpr (L::uses_displacement) write(K, s.kd);
+    if constexpr (L::uses_velocity) write(C, s.kv);
+  }
+}
 template <class L>
 void tangent_values(const Group& g, const double* u, const double* v, double t, double*& K, double*& C,
                     const double* committed) {
   if constexpr (!L::is_load) {
+    switch (g.storage) {
+      case ground: return two_entry_tangent_values<L, ground>(g, u, v, t, K, C, committed);
+      case pair: return two_entry_tangent_values<L, pair>(g, u, v, t, K, C, committed);
+      case mixed: return two_entry_tangent_values<L, mixed>(g, u, v, t, K, C, committed);
+      default: break;
+    }
     for (std::size_t k = 0; k < g.size; ++k) {
       const Slopes s = slopes_at<L>(g, k, u, v, t, committed);
       auto write = [&](double*& out, double x) {

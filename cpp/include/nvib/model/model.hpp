@@ -266,6 +266,8 @@ class Model {
 
   // out = K u + C v + f(u, v, t): everything on the left of M a + ... = 0.
   void force(const CVecRef& u, const CVecRef& v, double t, VecRef out, Stats& st) { force_into(u, v, t, out, st); }
+  // The same on the steppers' own vectors (no Eigen::Ref temporaries: see acceleration()).
+  void force(const Vector& u, const Vector& v, double t, Vector& out, Stats& st) { force_into(u, v, t, out, st); }
 
   // a = -M^{-1} (K u + C v + f(u, v, t))
   void acceleration(const CVecRef& u, const CVecRef& v, double t, VecRef a, Stats& st) {

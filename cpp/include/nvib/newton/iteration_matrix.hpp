@@ -71,6 +71,7 @@ class SparseIterationMatrix {
  public:
   bool ready() const { return ready_; }
   const SparseMatrix& matrix() const { return S_; }
+  SparseMatrix& matrix() { return S_; }  // (its values, to fill from another layout)
   Index nonzeros() const { return static_cast<Index>(S_.nonZeros()); }
   // Symmetric S: symmetric K and C (every effect's g g^T is).
   bool symmetric() const { return symmetric_; }
@@ -78,6 +79,7 @@ class SparseIterationMatrix {
   template <class ModelT>
   void setup(const ModelT& model) {
     const Index n = model.size();
+    retargeted_ = have_base_ = false;
     velocity_ = model.uses_velocity();
     kent_.clear();
     cent_.clear();
@@ -124,30 +126,59 @@ class SparseIterationMatrix {
     ready_ = true;
   }
 
-  // S at the tangent of (u, v, t); false if the tangent is not finite.
+  // S at the tangent of (u, v, t), into values(); false if the tangent is not finite. K_t and C_t are
+  // summed entry by entry in the order of the effects, then their linear parts, and S = c_K K_t + c_M M
+  // + c_C C_t: the operations of the dense assembly (DenseIterationMatrix), so that a factorisation
+  // that does the dense LU's arithmetic (the band of a chain) gives its bits. The linear parts and the
+  // mass are laid out in S's storage once.
   template <class ModelT>
   bool assemble(ModelT& model, const IterationMatrix& im, Stats& st) {
     if (!ready_) setup(model);
     model.tangent_values(*im.u, *im.v, im.t, kvals_.data(), cvals_.data(), st);
-    for (double x : kvals_)
-      if (!std::isfinite(x)) return false;
-    for (double x : cvals_)
-      if (!std::isfinite(x)) return false;
-    double* s = S_.valuePtr();
-    std::fill_n(s, S_.nonZeros(), 0.0);
-    for (size_t k = 0; k < posM_.size(); ++k) s[posM_[k]] += im.cM * mvals_[k];
-    add_values(model.K(), posK_, im.cK, s);
-    for (size_t k = 0; k < posNK_.size(); ++k) s[posNK_[k]] += im.cK * kvals_[k];
+    if (!have_base_) linear_parts(model);
+    const size_t m = static_cast<size_t>(num_values());
+    std::fill(tk_.begin(), tk_.end(), 0.0);
+    // x - x is 0 for a finite x and NaN otherwise: one sum tells whether every entry is finite.
+    double finite = scatter(posNK_, kvals_.data(), tk_.data());
+    const double cK = im.cK, cM = im.cM, cC = im.cC;
+    double* __restrict s = values();
+    const double *__restrict tk = tk_.data(), *__restrict kl = klin_.data(), *__restrict ml = mlin_.data();
+    for (size_t q = 0; q < m; ++q) s[q] = cK * (tk[q] + kl[q]) + cM * ml[q];
     if (velocity_) {
-      add_values(model.C(), posC_, im.cC, s);
-      for (size_t k = 0; k < posNC_.size(); ++k) s[posNC_[k]] += im.cC * cvals_[k];
-      double* c = Ct_.valuePtr();
+      std::fill(tc_.begin(), tc_.end(), 0.0);
+      finite += scatter(posNC_, cvals_.data(), tc_.data());
+      const double *__restrict tc = tc_.data(), *__restrict cl = clin_.data();
+      for (size_t q = 0; q < m; ++q) s[q] += cC * (tc[q] + cl[q]);
+      double* c = Ct_.valuePtr();  // C_t alone (the incremental format's C_t (v1 - v_n))
       std::fill_n(c, Ct_.nonZeros(), 0.0);
-      add_values(model.C(), posCtC_, 1.0, c);
-      for (size_t k = 0; k < posCtN_.size(); ++k) c[posCtN_[k]] += cvals_[k];
+      scatter(posCtN_, cvals_.data(), c);
+      add_values(model.C(), posCtC_, c);
     }
     K_ = &model.K();
-    return true;
+    return finite == 0.0;
+  }
+
+  // Where assemble() writes S: matrix()'s values (compressed columns), or the layout of a
+  // factorisation that reads S in its own storage (retarget()).
+  double* values() { return retargeted_ ? target_.data() : S_.valuePtr(); }
+  const double* values() const { return retargeted_ ? target_.data() : S_.valuePtr(); }
+  Index num_values() const { return retargeted_ ? static_cast<Index>(target_.size()) : static_cast<Index>(S_.nonZeros()); }
+  // From now on S is assembled into a storage of `size` values, the k-th stored value of matrix() going
+  // to to[k] (to[k] < 0: not read by that factorisation, such as the upper triangle of a symmetric S):
+  // one pass fewer than assembling the compressed columns and copying them over. matrix() keeps its
+  // pattern (and stale values).
+  void retarget(const std::vector<int>& to, Index size) {
+    auto remap = [&](std::vector<int>& pos) {
+      for (int& p : pos) p = to[static_cast<size_t>(p)] >= 0 ? to[static_cast<size_t>(p)] : static_cast<int>(size);
+    };
+    remap(posM_);
+    remap(posK_);
+    remap(posC_);
+    remap(posNK_);
+    remap(posNC_);
+    target_.assign(static_cast<size_t>(size) + 1, 0.0);  // the last value: where what is not read goes
+    retargeted_ = true;
+    have_base_ = false;
   }
 
   void multiply_C(const Vector& x, Vector& out) const {
@@ -196,10 +227,36 @@ class SparseIterationMatrix {
     pos.reserve(entries.size());
     for (const Entry& e : entries) pos.push_back(position(S, e.row, e.col));
   }
-  // S[pos[k]] += c A.values[k] (A's values in its storage order, which positions_of followed).
-  static void add_values(const SparseMatrix& A, const std::vector<int>& pos, double c, double* s) {
-    const double* a = A.valuePtr();
-    for (size_t k = 0; k < pos.size(); ++k) s[pos[k]] += c * a[k];
+  // The mass and the linear K and C in S's storage (0 where they have no entry), and the work arrays
+  // of K_t and C_t.
+  template <class ModelT>
+  void linear_parts(const ModelT& model) {
+    const size_t m = static_cast<size_t>(num_values());
+    mlin_.assign(m, 0.0);
+    klin_.assign(m, 0.0);
+    scatter(posM_, mvals_.data(), mlin_.data());
+    add_values(model.K(), posK_, klin_.data());
+    tk_.assign(m, 0.0);
+    if (velocity_) {
+      clin_.assign(m, 0.0);
+      add_values(model.C(), posC_, clin_.data());
+      tc_.assign(m, 0.0);
+    }
+    have_base_ = true;
+  }
+  // s[pos[k]] += x[k] for every k, in order; returns the sum of x[k] - x[k] (0 unless some x[k] is not finite).
+  static double scatter(const std::vector<int>& pos, const double* __restrict x, double* __restrict s) {
+    const int* __restrict p = pos.data();
+    double nonfinite = 0.0;
+    for (size_t k = 0, m = pos.size(); k < m; ++k) {
+      s[p[k]] += x[k];
+      nonfinite += x[k] - x[k];
+    }
+    return nonfinite;
+  }
+  // S[pos[k]] += A.values[k] (A's values in its storage order, which positions_of followed).
+  static void add_values(const SparseMatrix& A, const std::vector<int>& pos, double* s) {
+    scatter(pos, A.valuePtr(), s);
   }
   static bool is_symmetric(const SparseMatrix& A) {
     if (A.nonZeros() == 0) return true;
@@ -210,8 +267,12 @@ class SparseIterationMatrix {
     return dmax <= 1e-14 * amax;
   }
 
-  bool ready_ = false, velocity_ = false, symmetric_ = true;
+  bool ready_ = false, velocity_ = false, symmetric_ = true, retargeted_ = false;
   SparseMatrix S_, Ct_;
+  std::vector<double> target_;  // S in a factorisation's own layout (retarget())
+  std::vector<double> mlin_, klin_, clin_;  // M and the linear K and C in S's storage (values())
+  std::vector<double> tk_, tc_;             // K_t and C_t being summed, in S's storage
+  bool have_base_ = false;
   const SparseMatrix* K_ = nullptr;
   std::vector<Entry> kent_, cent_;
   std::vector<double> kvals_, cvals_, mvals_;

@@ -10,11 +10,18 @@
 
 namespace nvib {
 
-// Which linear solver the Newton component uses: automatic (a dense LU for small or nearly full
-// iteration matrices, sparse otherwise: IterationSystem), or forced.
-enum class LinearSolverChoice { automatic, dense, sparse };
+// Which linear solver the Newton component uses: automatic (banded LDL^T for a symmetric iteration
+// matrix that fits its band, a dense LU for small or nearly full ones, sparse otherwise:
+// IterationSystem), or forced.
+enum class LinearSolverChoice { automatic, dense, sparse, banded };
 inline const char* to_string(LinearSolverChoice c) {
-  return c == LinearSolverChoice::automatic ? "auto" : c == LinearSolverChoice::dense ? "dense" : "sparse";
+  switch (c) {
+    case LinearSolverChoice::automatic: return "auto";
+    case LinearSolverChoice::dense: return "dense";
+    case LinearSolverChoice::sparse: return "sparse";
+    case LinearSolverChoice::banded: return "banded";
+  }
+  return "?";
 }
 
 // newton:        tangent and factorisation every iteration;
@@ -53,8 +60,8 @@ struct Newton {
   static constexpr const char* doc =
       "Options of the Newton iteration of the implicit schemes: iteration ('newton', 'modified', 'initial', "
       "'incremental' or 'one_iteration'), max_iter, rtol (relative to the force scale of the step), atol "
-      "(force units), jacobian ('analytic' or 'finite_difference') and linear_solver ('auto', 'dense' or "
-      "'sparse'; Stats.linear_solver says which was used).";
+      "(force units), jacobian ('analytic' or 'finite_difference') and linear_solver ('auto', 'dense', "
+      "'sparse' or 'banded'; Stats.linear_solver says which was used).";
   NewtonMode iteration = NewtonMode::newton;  // the equilibrium iteration (its mode)
   int max_iter = 20;
   double rtol = 1e-10;  // relative to the force scale of the step
@@ -71,8 +78,8 @@ struct Newton {
     v(s.rtol, param::real("rtol", "residual tolerance relative to the force scale of the step").at_least(0.0));
     v(s.atol, param::real("atol", "absolute residual tolerance, in force units").at_least(0.0));
     v(s.jacobian, param::choice("jacobian", "how the tangent is obtained", {"analytic", "finite_difference"}));
-    v(s.linear_solver, param::choice("linear_solver", "dense LU, sparse LDLT/LU, or chosen by size and density",
-                                     {"auto", "dense", "sparse"}));
+    v(s.linear_solver, param::choice("linear_solver", "dense LU, sparse LDLT/LU, banded LDLT, or chosen by pattern and size",
+                                     {"auto", "dense", "sparse", "banded"}));
   }
   void validate() const {
     param::check_ranges(*this);

@@ -1,7 +1,7 @@
 // The linear system of the Newton component: the iteration matrix assembled
-// from the model (iteration_matrix.hpp) and factorised (linalg/), dense or
-// sparse, chosen once per stepper by size and density (or forced) and named in
-// Stats::linear_solver. The Newton component asks it for
+// from the model (iteration_matrix.hpp) and factorised (linalg/): dense, banded
+// or sparse, chosen once per stepper by its pattern and size (or forced) and
+// named in Stats::linear_solver. The Newton component asks it for
 //   bool factorize(model, IterationMatrix, Stats&, bool finite_difference, choice)   false if S is singular
 //   void solve_in_place(Vector& x)                      x <- S^{-1} x
 //   void multiply_C(const Vector& x, Vector& out) const out = C_t x (the last tangent)
@@ -14,6 +14,7 @@
 #include <string>
 
 #include "../base/types.hpp"
+#include "../linalg/banded_ldlt.hpp"
 #include "../linalg/dense_lu.hpp"
 #include "../linalg/sparse_factorization.hpp"
 #include "../model/mass.hpp"
@@ -22,16 +23,28 @@
 
 namespace nvib {
 
+// Every name Stats::linear_solver takes (a pickled or saved name is read back through this list).
+inline constexpr const char* kLinearSolverNames[] = {"dense LU", "banded LDLT", "sparse LDLT", "sparse LU"};
+
 class IterationSystem {
  public:
-  // Up to this size the dense LU is used whatever the pattern (it is faster there);
-  // up to kDenseFullMax also when S is more than a quarter full.
+  // Automatic choice: a symmetric S whose band (half-width b <= n/2, natural order) holds at most
+  // twice the entries of its lower triangle is factorised in the band (a chain, a shear building, a
+  // beam: no fill outside it, and no index lists); otherwise up to kDenseBelow DOFs the dense LU (faster
+  // there than a sparse factorisation), up to kDenseFullMax also when S is more than a quarter full,
+  // else sparse LDL^T or LU.
   static constexpr Index kDenseBelow = 64, kDenseFullMax = 500;
   static constexpr const char* kDenseName = "dense LU";
+  static constexpr const char* kBandedName = "banded LDLT";
 
   void resize(Index) { chosen_ = false; }
-  const char* name() const { return !chosen_ ? "" : dense_ ? kDenseName : sparse_lu_.name(); }
-  bool is_dense() const { return dense_; }
+  const char* name() const {
+    if (!chosen_) return "";
+    if (kind_ == Kind::dense) return kDenseName;
+    if (kind_ == Kind::banded && !band_failed_) return kBandedName;
+    return sparse_lu_.name();
+  }
+  bool is_dense() const { return kind_ == Kind::dense; }
 
   // Assembles S and factorises it, unless it is, bit for bit, the S factorised last (a piecewise-linear
   // law on the same branch): then the factors are kept and reused() says so.
@@ -40,7 +53,7 @@ class IterationSystem {
                  LinearSolverChoice choice = LinearSolverChoice::automatic) {
     if (!chosen_) choose(model, finite_difference, choice);
     reused_ = false;
-    if (dense_) {
+    if (kind_ == Kind::dense) {
       if (dense_S_.size() != model.size() || S_.rows() != model.size()) {
         dense_S_.resize(model.size());
         lu_.resize(model.size());
@@ -57,33 +70,49 @@ class IterationSystem {
       return last_ok_;
     }
     if (!sparse_S_.assemble(model, im, st)) return have_last_ = false;
-    const SparseMatrix& S = sparse_S_.matrix();
-    st.linear_solver = sparse_lu_.name();
-    if (have_last_ && same(S.valuePtr(), last_.data(), S.nonZeros())) return reused_ = true, last_ok_;
-    last_ok_ = sparse_lu_.factorize(S);
-    st.linear_solver = sparse_lu_.name();
-    last_.resize(S.nonZeros(), 1);
-    std::copy(S.valuePtr(), S.valuePtr() + S.nonZeros(), last_.data());
+    const double* values = sparse_S_.values();
+    const Index count = sparse_S_.num_values();
+    st.linear_solver = name();
+    if (have_last_ && same(values, last_.data(), count)) return reused_ = true, last_ok_;
+    if (kind_ == Kind::banded) {
+      // A pivot the band cannot take without pivoting: this S goes to the sparse LU (with pivoting).
+      band_failed_ = !banded_.factorize(values);
+      last_ok_ = !band_failed_;
+      if (band_failed_) {
+        SparseMatrix& S = sparse_S_.matrix();
+        banded_.to_compressed(values, S);
+        if (!lu_ready_) sparse_lu_.analyze(S, false);
+        lu_ready_ = true;
+        last_ok_ = sparse_lu_.factorize(S);
+      }
+    } else {
+      last_ok_ = sparse_lu_.factorize(sparse_S_.matrix());
+    }
+    st.linear_solver = name();
+    last_.resize(count, 1);
+    std::copy(values, values + count, last_.data());
     have_last_ = true;
     return last_ok_;
   }
   // The last factorize() kept the factors of an identical S.
   bool reused() const { return reused_; }
   void solve_in_place(Vector& x) const {
-    if (dense_)
+    if (kind_ == Kind::dense)
       lu_.solve_in_place(x);
+    else if (kind_ == Kind::banded && !band_failed_)
+      banded_.solve_in_place(x.data());
     else
       sparse_lu_.solve_in_place(x);
   }
   void multiply_C(const Vector& x, Vector& out) const {
-    if (dense_)
+    if (kind_ == Kind::dense)
       dense_S_.multiply_C(x, out);
     else
       sparse_S_.multiply_C(x, out);
   }
-  Vector tangent_diagonal() { return dense_ ? dense_S_.tangent_diagonal() : sparse_S_.tangent_diagonal(); }
+  Vector tangent_diagonal() { return is_dense() ? dense_S_.tangent_diagonal() : sparse_S_.tangent_diagonal(); }
   Index first_nonfinite_tangent_row() const {
-    return dense_ ? dense_S_.first_nonfinite_tangent_row() : sparse_S_.first_nonfinite_tangent_row();
+    return is_dense() ? dense_S_.first_nonfinite_tangent_row() : sparse_S_.first_nonfinite_tangent_row();
   }
 
  private:
@@ -91,11 +120,14 @@ class IterationSystem {
   void choose(const ModelT& model, bool finite_difference, LinearSolverChoice choice) {
     const Index n = model.size();
     chosen_ = true;
+    have_last_ = band_failed_ = lu_ready_ = false;
     const bool sparse_possible = model.has_sparse_tangent() && !finite_difference;
-    NVIB_CHECK(choice != LinearSolverChoice::sparse || sparse_possible, "linear_solver",
-               finite_difference ? "'sparse' needs jacobian='analytic' (a finite-difference tangent is dense)"
-                                 : "'sparse' needs a model whose tangent is known entry by entry (declared effects "
-                                   "and laws on measures; not a force callable)");
+    const std::string asked = std::string("'") + to_string(choice) + "'";
+    NVIB_CHECK(choice == LinearSolverChoice::automatic || choice == LinearSolverChoice::dense || sparse_possible,
+               "linear_solver",
+               finite_difference ? asked + " needs jacobian='analytic' (a finite-difference tangent is dense)"
+                                 : asked + " needs a model whose tangent is known entry by entry (declared effects "
+                                           "and laws on measures; not a force callable)");
     if (!sparse_possible || choice == LinearSolverChoice::dense) {
       const double mb = 16.0 * static_cast<double>(n) * static_cast<double>(n) / 1e6;
       // the argument to blame: the dense solver the caller asked for on a model whose tangent is sparse,
@@ -114,18 +146,31 @@ class IterationSystem {
                            std::to_string(n) + " matrix (" + detail::fmt(mb) + " MB); above " +
                            std::to_string(Mass::kDenseMax) +
                            " DOFs declare its forces as effects (their tangent is sparse), or use an explicit scheme");
-      dense_ = true;
+      kind_ = Kind::dense;
     } else if (choice == LinearSolverChoice::sparse) {
       setup_sparse(model);
-      dense_ = false;
-    } else if (n <= kDenseBelow) {
-      dense_ = true;
     } else {
-      setup_sparse(model);
-      const double fill = static_cast<double>(sparse_S_.nonzeros()) / (static_cast<double>(n) * static_cast<double>(n));
-      dense_ = n <= kDenseFullMax && fill > 0.25;
+      sparse_S_.setup(model);
+      const SparseMatrix& S = sparse_S_.matrix();
+      const Index b = BandedLDLT::half_bandwidth(S);
+      const bool band_fits = sparse_S_.symmetric() && 2 * b <= n && (b + 1) * n <= 2 * lower_nonzeros(S);
+      NVIB_CHECK(choice != LinearSolverChoice::banded || sparse_S_.symmetric(), "linear_solver",
+                 "'banded' factorises a symmetric iteration matrix (LDL^T); this model's K or C is not symmetric: "
+                 "use 'sparse' (LU) or 'auto'");
+      if (choice == LinearSolverChoice::banded || band_fits) {
+        kind_ = Kind::banded;
+        banded_.analyze(S);
+        sparse_S_.retarget(banded_.layout(S), banded_.size());
+      } else if (n <= kDenseBelow) {
+        kind_ = Kind::dense;
+      } else {
+        sparse_lu_.analyze(S, sparse_S_.symmetric());
+        lu_ready_ = true;
+        const double fill = static_cast<double>(sparse_S_.nonzeros()) / (static_cast<double>(n) * static_cast<double>(n));
+        kind_ = n <= kDenseFullMax && fill > 0.25 ? Kind::dense : Kind::sparse;
+      }
     }
-    if (dense_) {
+    if (kind_ == Kind::dense) {
       dense_S_.resize(n);
       lu_.resize(n);
     }
@@ -134,6 +179,14 @@ class IterationSystem {
   void setup_sparse(const ModelT& model) {
     sparse_S_.setup(model);
     sparse_lu_.analyze(sparse_S_.matrix(), sparse_S_.symmetric());
+    lu_ready_ = true;
+    kind_ = Kind::sparse;
+  }
+  static Index lower_nonzeros(const SparseMatrix& A) {
+    Index k = 0;
+    for (Index j = 0; j < A.outerSize(); ++j)
+      for (SparseMatrix::InnerIterator it(A, j); it; ++it) k += it.row() >= j;
+    return k;
   }
 
   static bool same(const double* a, const double* b, Index n) {
@@ -142,12 +195,17 @@ class IterationSystem {
     return true;
   }
 
-  bool chosen_ = false, dense_ = true;
+  enum class Kind { dense, banded, sparse };
+  Kind kind_ = Kind::dense;
+  bool chosen_ = false;
   bool have_last_ = false, last_ok_ = false, reused_ = false;
+  bool band_failed_ = false;  // the last S had a pivot the band cannot take: it went to the sparse LU
+  bool lu_ready_ = false;     // sparse_lu_ has analysed S's pattern
   Matrix S_, last_;  // the assembled S (dense), and the S of the factors kept (dense, or the sparse values)
   DenseIterationMatrix dense_S_;
   DenseLU lu_;
   SparseIterationMatrix sparse_S_;
+  BandedLDLT banded_;
   SparseFactorization sparse_lu_;
 };
 

@@ -194,9 +194,13 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   void predict(Vector& x) const { x = u_; }  // constant displacement (the incremental format's starting point)
   // a1, v1 from u1 by the Newmark relations (at the predictor).
   void update(const Vector& x) {
-    const double h = h_, beta = p_.beta, gamma = p_.gamma;
-    a1_ = c0_ * (x - u_ - h * v_) - (0.5 / beta - 1.0) * a_;
-    v1_ = v_ + (h * (1.0 - gamma)) * a_ + (h * gamma) * a1_;
+    const double h = h_, c0 = c0_, ka = 0.5 / p_.beta - 1.0, hv = h * (1.0 - p_.gamma), ha = h * p_.gamma;
+    const double *xp = x.data(), *u = u_.data(), *v = v_.data(), *a = a_.data();
+    double *a1 = a1_.data(), *v1 = v1_.data();
+    detail::for_each_index(x.size(), [=](Index i) {
+      a1[i] = c0 * (xp[i] - u[i] - h * v[i]) - ka * a[i];
+      v1[i] = v[i] + hv * a[i] + ha * a1[i];
+    });
   }
   // ... and by the increments of the same relations in the iterations: da1 = c0 du, dv1 = c1 du.
   // Recomputed from u1, a1 would carry the round-off of c0 (u1 - u_n - h v_n), about eps c0 |u| (4e-4 N
@@ -204,8 +208,13 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
   // there): Newton would end on its stall test after a wasted iteration. By increments the round-off is
   // eps c0 (h |v_n| + |u1 - u_n|), a few hundred times smaller there.
   void increment(const Vector& du) {
-    a1_.noalias() += c0_ * du;
-    v1_.noalias() += c1_ * du;
+    const double c0 = c0_, c1 = c1_;
+    const double* d = du.data();
+    double *a1 = a1_.data(), *v1 = v1_.data();
+    detail::for_each_index(du.size(), [=](Index i) {
+      a1[i] += c0 * d[i];
+      v1[i] += c1 * d[i];
+    });
   }
   IterationMatrix matrix() const { return coefficients(*ua_at_, *va_at_, ta_); }
   IterationMatrix start_matrix() const { return coefficients(u_, v_, this->time()); }
@@ -235,14 +244,15 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
       const double *a1 = a1_.data(), *a0 = a_.data(), *g = G1_.data();
       double* rp = r.data();
       double rn = 0.0, scale = 0.0;
-      for (Index i = 0, n = r.size(); i < n; ++i) {
+      bool nan = false;
+      detail::for_each_index(r.size(), [&](Index i) {
         const double inertia_new = (1.0 - am) * m[i] * a1[i], inertia_old = am * m[i] * a0[i];
         rp[i] = inertia_new + inertia_old + g[i];
         rn = std::max(rn, std::abs(rp[i]));
         scale = std::max(scale, std::max(std::abs(inertia_new), std::max(std::abs(inertia_old), std::abs(g[i]))));
-        if (std::isnan(rp[i])) rn = rp[i];  // max() would drop a NaN
-      }
-      return {rn, scale};
+        nan = nan || std::isnan(rp[i]);  // max() would drop a NaN
+      });
+      return {nan ? std::numeric_limits<double>::quiet_NaN() : rn, scale};
     }
     model_.mass().apply(a1_, r);
     r *= (1.0 - am);
