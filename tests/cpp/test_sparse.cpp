@@ -149,15 +149,45 @@ int main() {
                            nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::sparse)), "sparse LDLT");
     same_with_both_solvers(("Newmark, chain, " + m).c_str(), model, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::dense)),
                            nvib::Newmark(0.25, 0.5, with_solver(mode, LS::banded)), "banded LDLT");
-    // Up to 64 DOFs (the dense LU's unblocked elimination) the band of a chain (diagonally dominant: no
-    // row exchanges) is factorised in the dense LU's arithmetic from an S assembled in the dense
-    // assembly's order: the same bits.
+    // Up to 64 DOFs (the dense LU's unblocked elimination) too
     const auto small = fx::make_effect_model(nvib::Mass::diagonal(Vector::LinSpaced(40, 1.0, 2.0)), chain(40));
     same_with_both_solvers(("Newmark, chain of 40, " + m).c_str(), small, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::dense)),
-                           nvib::Newmark(0.25, 0.5, with_solver(mode, LS::banded)), "banded LDLT", 0.0);
+                           nvib::Newmark(0.25, 0.5, with_solver(mode, LS::banded)), "banded LDLT");
     same_with_both_solvers(("GeneralizedAlpha(rho 0.8), chain of 40, " + m).c_str(), small,
                            nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::dense)),
-                           nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::banded)), "banded LDLT", 0.0);
+                           nvib::GeneralizedAlpha::from_rho_inf(0.8, with_solver(mode, LS::banded)), "banded LDLT");
+  }
+  // The sparse assembly of S sums K_t, C_t, the mass and the linear parts in the dense assembly's order:
+  // the same S, bit for bit (chain: nonlinear springs, linear dampers; with a linear K and a consistent
+  // mass too).
+  {
+    SparseMatrix Kl(n, n), Ms(n, n);
+    for (Index i = 0; i + 1 < n; ++i) Kl.insert(i, i + 1) = Kl.insert(i + 1, i) = -30.0 - double(i);
+    for (Index i = 0; i < n; ++i) {
+      Kl.insert(i, i) = 100.0;
+      Ms.insert(i, i) = 4.0;
+      if (i + 1 < n) Ms.insert(i, i + 1) = Ms.insert(i + 1, i) = 1.0;
+    }
+    auto lumped = fx::make_effect_model(nvib::Mass::diagonal(Vector::LinSpaced(n, 1.0, 2.0)), chain(n));
+    auto consistent = fx::make_effect_model(nvib::Mass::sparse(Ms), chain(n), Kl);
+    auto same_S = [&](auto& model) {
+      const Vector u = Vector::LinSpaced(n, -0.02, 0.03), v = Vector::LinSpaced(n, 0.5, -0.4);
+      const nvib::IterationMatrix im{4e6, 2e3, 0.7, &u, &v, 0.3};
+      nvib::Stats st;
+      nvib::SparseIterationMatrix sparse_S;
+      sparse_S.setup(model);
+      CHECK(sparse_S.assemble(model, im, st));
+      nvib::DenseIterationMatrix dense_S;
+      Matrix D = Matrix::Zero(n, n);
+      dense_S.assemble(model, im, st, false, D);
+      const SparseMatrix& S = sparse_S.matrix();
+      bool same = true;
+      for (Index j = 0; j < n; ++j)
+        for (SparseMatrix::InnerIterator it(S, j); it; ++it) same = same && it.value() == D(it.row(), j);
+      CHECK(same && Matrix(S) == D);
+    };
+    same_S(lumped);
+    same_S(consistent);
   }
   // The automatic choice: a chain's band at every size; a long-range coupling spoils the band: dense LU
   // up to 64 DOFs, sparse LDL^T above.

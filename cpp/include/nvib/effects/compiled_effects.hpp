@@ -96,6 +96,8 @@ class CompiledEffects {
   }
   const Vector& constant_load() const { return f_const_; }  // -P of the constant loads
   const std::vector<kernels::Group>& groups() const { return groups_; }
+  // Effects in the dense_first groups (their values are kept per time by EffectSet).
+  std::size_t num_dense_loads() const { return dense_loads_; }
   bool uses_velocity() const { return velocity_; }
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return linear_; }
@@ -319,6 +321,13 @@ class CompiledEffects {
     g.rows = st.rows.empty() ? nullptr : st.rows.data();
     g.params = st.params.get();
     g.kernel = force_kernel<L>(g.storage, g.uniform);
+    if constexpr (L::is_load) {
+      if (g.storage == dense_first) {
+        g.load_values = &dense_load_values<L>;
+        g.load = dense_loads_;
+        dense_loads_ += g.size;
+      }
+    }
     if constexpr (law::has_state<L>) {
       g.state = state_size;
       state_size += g.size * law::state_width<L>();
@@ -339,6 +348,7 @@ class CompiledEffects {
   std::vector<std::vector<std::uint32_t>> members_;  // per group: its single effects (empty for an array's)
   std::vector<std::size_t> group_arrays_;           // per group: its array, or npos
   std::vector<double> initial_state_;
+  std::size_t dense_loads_ = 0;
 };
 
 }  // namespace effects

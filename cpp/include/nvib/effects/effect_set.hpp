@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <stdexcept>
@@ -42,7 +43,8 @@ class EffectSet {
             std::vector<EffectArray> arrays = {})
       : c_(std::make_shared<const CompiledEffects>(std::move(list), mass, linear, std::move(arrays))),
         committed_(c_->initial_state()),
-        trial_(c_->initial_state()) {}
+        trial_(c_->initial_state()),
+        load_f_(c_->num_dense_loads(), 0.0) {}
 
   const std::vector<Effect>& effects() const { return c_->effects(); }
   const std::vector<EffectArray>& arrays() const { return c_->arrays(); }
@@ -81,9 +83,15 @@ class EffectSet {
     const double* committed = committed_.data();
     double* trial = trial_.data();
     auto g = groups.begin();
-    if (g != groups.end() && g->writes) {
-      g->kernel(*g, up, vp, t, op, committed, trial);  // writes constant loads + its loads
-      ++g;
+    if (g != groups.end() && g->storage == kernels::dense_first) {
+      // The dense loads: their values kept while t does not change (a step's Newton iterations).
+      if (!(t == load_t_)) {
+        for (auto q = g; q != groups.end() && q->storage == kernels::dense_first; ++q)
+          q->load_values(*q, t, load_f_.data() + q->load);
+        load_t_ = t;
+      }
+      for (; g != groups.end() && g->storage == kernels::dense_first; ++g)
+        kernels::add_dense_loads(*g, load_f_.data() + g->load, op);  // the first writes (constant loads too)
     } else {
       // A stored zero the compiler cannot see through keeps this a plain loop, not memcpy.
       const double* base = c_->constant_load().data();
@@ -399,6 +407,8 @@ class EffectSet {
   std::shared_ptr<const CompiledEffects> c_ = std::make_shared<const CompiledEffects>();
   std::vector<double> committed_;
   mutable std::vector<double> trial_;  // written by every force evaluation (a pure trial)
+  mutable std::vector<double> load_f_;  // the dense loads' values at load_t_ (a pure function of t)
+  mutable double load_t_ = std::numeric_limits<double>::quiet_NaN();
   bool verify_ = false;
   double opaque_zero_ = 0.0;  // see eval()
 };

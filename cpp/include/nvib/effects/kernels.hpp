@@ -52,6 +52,9 @@ struct Group {
   const void* params = nullptr;           // L::Params[size], or [1] if uniform
   std::size_t state = 0;                  // offset of the first effect's state in the state buffers
   ForceKernel kernel = nullptr;
+  // dense_first: the loads' values f_k(t), and where the group's first sits among every dense load's
+  void (*load_values)(const Group&, double t, double* f) = nullptr;
+  std::size_t load = 0;
 
   template <class L>
   const typename L::Params& params_of(std::size_t k) const {
@@ -154,36 +157,49 @@ inline double respond(const typename L::Params& p, double d, double dd, double t
   }
 }
 
-// The dense loads (a ground acceleration's M r a_g(t)): the group's first effect writes the force
-// vector when the group `writes`, with the constant loads if there are any; the others add. A load
-// reads no state, so there is no measure to form and no per-effect test in the loops.
+// The dense loads (a ground acceleration's M r a_g(t)), in two parts: their values f_k(t), and the
+// rows w_k f_k they add, so that the values can be kept while t does not change (the Newton
+// iterations of a step evaluate the force several times at one time: EffectSet). The group's first
+// effect writes the force vector when the group `writes`, with the constant loads if there are any;
+// the others add. A load reads no state, so there is no measure to form and no per-effect test.
 template <class L>
-void add_dense_loads(const Group& g, double t, double* __restrict out) {
+void dense_load_values(const Group& g, double t, double* f) {
+  for (std::size_t k = 0; k < g.size; ++k) f[k] = L::value(g.params_of<L>(k), 0.0, 0.0, t);
+}
+inline void add_dense_loads(const Group& g, const double* f, double* __restrict out) {
   std::size_t k = 0;
   const Index n = g.n;
   if (g.writes && g.size > 0) {
-    const double f = L::value(g.params_of<L>(0), 0.0, 0.0, t);
+    const double f0 = f[0];
     const double* __restrict w = g.rows;
     if (g.constant_load == nullptr) {  // one stream less: no constant vector to read
-      detail::for_each_index(n, [=](Index q) { out[q] = w[q] * f; });
+      detail::for_each_index(n, [=](Index q) { out[q] = w[q] * f0; });
     } else {
       const double* __restrict base = g.constant_load;
-      detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w[q] * f; });
+      detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w[q] * f0; });
     }
     k = 1;
   }
   for (; k < g.size; ++k) {
-    const double f = L::value(g.params_of<L>(k), 0.0, 0.0, t);
+    const double fk = f[k];
     const double* __restrict w = g.rows + static_cast<Index>(k) * n;
-    for (Index q = 0; q < n; ++q) out[q] += w[q] * f;
+    for (Index q = 0; q < n; ++q) out[q] += w[q] * fk;
   }
 }
+using LoadValues = void (*)(const Group&, double t, double* f);
 
 template <class L, Storage S, bool Uniform>
 void add_forces(const Group& g, const double* u, const double* v, double t, double* out, const double* committed,
                 double* trial) {
   if constexpr (S == dense_first && L::is_load) {  // only loads are stored dense_first (CompiledEffects)
-    add_dense_loads<L>(g, t, out);
+    for (std::size_t k = 0; k < g.size; ++k) {  // (EffectSet keeps the values instead: load_values)
+      Group one = g;
+      one.rows = g.rows + static_cast<Index>(k) * g.n;
+      one.size = 1;
+      one.writes = g.writes && k == 0;
+      const double f = L::value(g.params_of<L>(k), 0.0, 0.0, t);
+      add_dense_loads(one, &f, out);
+    }
     (void)u, (void)v, (void)committed, (void)trial;
     return;
   } else {

@@ -128,9 +128,8 @@ class SparseIterationMatrix {
 
   // S at the tangent of (u, v, t), into values(); false if the tangent is not finite. K_t and C_t are
   // summed entry by entry in the order of the effects, then their linear parts, and S = c_K K_t + c_M M
-  // + c_C C_t: the operations of the dense assembly (DenseIterationMatrix), so that a factorisation
-  // that does the dense LU's arithmetic (the band of a chain) gives its bits. The linear parts and the
-  // mass are laid out in S's storage once.
+  // + c_C C_t: the operations of the dense assembly (DenseIterationMatrix), so that both give the same
+  // S, bit for bit. The linear parts and the mass are laid out in S's storage once.
   template <class ModelT>
   bool assemble(ModelT& model, const IterationMatrix& im, Stats& st) {
     if (!ready_) setup(model);
@@ -166,17 +165,19 @@ class SparseIterationMatrix {
   // From now on S is assembled into a storage of `size` values, the k-th stored value of matrix() going
   // to to[k] (to[k] < 0: not read by that factorisation, such as the upper triangle of a symmetric S):
   // one pass fewer than assembling the compressed columns and copying them over. matrix() keeps its
-  // pattern (and stale values).
+  // pattern (and stale values). What is not read goes past `size`, each contribution to a place of its
+  // own: added into one place, they would wait on each other's stores.
   void retarget(const std::vector<int>& to, Index size) {
+    int spare = static_cast<int>(size);
     auto remap = [&](std::vector<int>& pos) {
-      for (int& p : pos) p = to[static_cast<size_t>(p)] >= 0 ? to[static_cast<size_t>(p)] : static_cast<int>(size);
+      for (int& p : pos) p = to[static_cast<size_t>(p)] >= 0 ? to[static_cast<size_t>(p)] : spare++;
     };
     remap(posM_);
     remap(posK_);
     remap(posC_);
     remap(posNK_);
     remap(posNC_);
-    target_.assign(static_cast<size_t>(size) + 1, 0.0);  // the last value: where what is not read goes
+    target_.assign(static_cast<size_t>(spare), 0.0);
     retargeted_ = true;
     have_base_ = false;
   }
