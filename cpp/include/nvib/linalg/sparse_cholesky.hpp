@@ -1,6 +1,8 @@
 // Sparse Cholesky factorisations, LL^T (the consistent mass) and LDL^T (Newton's iteration
-// matrix), with the fill-reducing ordering applied here instead of inside Eigen's simplicial
-// solvers. Eigen's own path copies and permutes the matrix into a newly allocated one at every
+// matrix): SparseCholesky chooses, by the factor's fill, between the supernodal factorisation
+// (supernodal_cholesky.hpp: dense kernels on groups of columns, for factors with large fronts, such
+// as 3-D solids) and the simplicial one, OrderedCholesky, with the fill-reducing ordering applied
+// here instead of inside Eigen's simplicial solvers. Eigen's own path copies and permutes the matrix into a newly allocated one at every
 // factorisation and permutes each right-hand side through a heap-allocated mask; here the
 // permuted upper triangle P A P^T is laid out once, with the place of every stored entry of A's
 // lower triangle in it, so that a refactorisation writes the values into place and a solve
@@ -16,6 +18,7 @@
 #include <Eigen/SparseCholesky>
 
 #include "../base/types.hpp"
+#include "supernodal_cholesky.hpp"
 
 namespace nvib {
 
@@ -107,6 +110,55 @@ class OrderedCholesky
   std::vector<int> perm_;   // i -> its row in P A P^T
   std::vector<int> place_;  // A's k-th stored value -> its index in PA_'s values (-1: not read)
   SparseMatrix PA_;
+};
+
+// The sparse Cholesky factorisation of a symmetric matrix whose pattern is fixed, supernodal where its
+// factor's fronts are large enough for dense kernels to pay, simplicial otherwise. The choice is made
+// by the supernodal analysis (its ordering, and the column counts of the factor without forming it):
+// kSupernodalAbove flops per stored entry of L and more (the mean front; 2 on a chain, 30 to 900 on
+// 2-D and 3-D meshes) go to the supernodal factorisation, which at 40 and more was at least 1.8x faster
+// and at 2 was 10 to 25 % slower (benchmarks/results/factorize.md). The same contract as
+// OrderedCholesky (analyze, factorize_values, info, solve_in_place, pivots, dof_pivots).
+template <bool LDLT>
+class SparseCholesky {
+ public:
+  static constexpr double kSupernodalAbove = 10.0;
+
+  // A: symmetric, square; its lower triangle is read (the pattern of every later A must be this one's).
+  void analyze(const SparseMatrix& A) {
+    supernodal_ = SupernodalCholesky<LDLT>();
+    supernodal_.analyze(A);
+    const double entries = std::max<double>(1.0, static_cast<double>(supernodal_.simplicial_nonzeros()));
+    use_supernodal_ = supernodal_.simplicial_flops() / entries >= kSupernodalAbove;
+    if (!use_supernodal_) {
+      supernodal_ = SupernodalCholesky<LDLT>();  // its workspaces freed
+      simplicial_.analyze(A);
+    }
+  }
+  bool supernodal() const { return use_supernodal_; }
+
+  void factorize_values(const SparseMatrix& A) {
+    if (use_supernodal_)
+      supernodal_.factorize_values(A);
+    else
+      simplicial_.factorize_values(A);
+  }
+  Eigen::ComputationInfo info() const { return use_supernodal_ ? supernodal_.info() : simplicial_.info(); }
+  // x <- A^{-1} x, through work (n entries, the caller's: the factors may be shared by threads).
+  void solve_in_place(double* x, Vector& work) const {
+    if (use_supernodal_)
+      supernodal_.solve_in_place(x, work);
+    else
+      simplicial_.solve_in_place(x, work);
+  }
+  // The pivots (D of LDL^T, or the squared diagonal of L), in the factor's order, and by row of A.
+  const Vector& pivots() const { return use_supernodal_ ? supernodal_.pivots() : simplicial_.pivots(); }
+  Vector dof_pivots() const { return use_supernodal_ ? supernodal_.dof_pivots() : simplicial_.dof_pivots(); }
+
+ private:
+  bool use_supernodal_ = false;
+  SupernodalCholesky<LDLT> supernodal_;
+  OrderedCholesky<LDLT> simplicial_;
 };
 
 }  // namespace nvib

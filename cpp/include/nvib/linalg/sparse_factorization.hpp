@@ -1,10 +1,9 @@
 // Factorising and solving a sparse matrix whose pattern is fixed: sparse LDL^T
-// with an AMD ordering for a symmetric matrix (falling back to sparse LU with
-// COLAMD when LDL^T without pivoting meets a zero or tiny pivot), sparse LU
-// otherwise. The symbolic analysis is done once (analyze); each factorize()
-// reuses it. LDL^T refactorises and solves without allocating (see
-// sparse_cholesky.hpp; only its scratch vectors beyond 128 kB go to the heap,
-// Eigen's limit for the stack); sparse LU allocates in every factorisation and solve.
+// for a symmetric matrix, supernodal or simplicial by its fill (SparseCholesky,
+// sparse_cholesky.hpp), falling back to sparse LU with COLAMD when LDL^T without
+// pivoting meets a zero or tiny pivot; sparse LU otherwise. The symbolic analysis
+// is done once (analyze); each factorize() reuses it. LDL^T refactorises and
+// solves without allocating; sparse LU allocates in every factorisation and solve.
 #pragma once
 
 #include <algorithm>
@@ -20,7 +19,7 @@ namespace nvib {
 
 class SparseFactorization {
  public:
-  const char* name() const { return lu_now_ ? "sparse LU" : "sparse LDLT"; }
+  const char* name() const { return lu_now_ ? "sparse LU" : ldlt_.supernodal() ? "supernodal LDLT" : "sparse LDLT"; }
 
   // The pattern of every matrix to come (S's, values ignored); symmetric: try LDL^T first.
   void analyze(const SparseMatrix& S, bool symmetric) {
@@ -73,7 +72,7 @@ class SparseFactorization {
   }
 
   bool symmetric_ = true, lu_now_ = false, lu_analyzed_ = false;
-  OrderedCholesky<true> ldlt_;
+  SparseCholesky<true> ldlt_;
   Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>> lu_;
   mutable Vector work_;
 };

@@ -1,6 +1,6 @@
 // Mass matrix: diagonal (lumped), sparse symmetric positive definite (a
 // consistent finite-element mass, factorised once by a sparse Cholesky with a
-// fill-reducing ordering) or dense symmetric positive definite (small models
+// fill-reducing ordering, supernodal where its factor fills in) or dense symmetric positive definite (small models
 // only: above kDenseMax DOFs it is refused, naming what to use instead).
 #pragma once
 
@@ -69,7 +69,7 @@ class Mass {
     auto data = std::make_shared<Data>();
     data->kind = Kind::sparse;
     data->d = M.diagonal();
-    auto llt = std::make_shared<OrderedCholesky<false>>();  // AMD ordering
+    auto llt = std::make_shared<SparseCholesky<false>>();  // supernodal or simplicial, by its fill
     llt->analyze(M);
     llt->factorize_values(M);
     data->sllt = llt;
@@ -279,7 +279,7 @@ class Mass {
     Matrix M;
     SparseMatrix S;
     std::shared_ptr<const Eigen::LLT<Matrix>> dllt;
-    std::shared_ptr<const OrderedCholesky<false>> sllt;
+    std::shared_ptr<const SparseCholesky<false>> sllt;
     std::string warning;
   };
   explicit Mass(std::shared_ptr<const Data> data) : data_(std::move(data)) {}

@@ -27,7 +27,8 @@
 namespace nvib {
 
 // Every name Stats::linear_solver takes (a pickled or saved name is read back through this list).
-inline constexpr const char* kLinearSolverNames[] = {"dense LU", "banded LDLT", "sparse LDLT", "sparse LU"};
+inline constexpr const char* kLinearSolverNames[] = {"dense LU", "banded LDLT", "sparse LDLT", "supernodal LDLT",
+                                                     "sparse LU"};
 
 class IterationSystem {
  public:
