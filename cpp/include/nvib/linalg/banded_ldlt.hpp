@@ -17,7 +17,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 #include <vector>
 
 #include "../base/types.hpp"
@@ -42,7 +41,6 @@ class BandedLDLT {
     band_.assign(static_cast<size_t>(n_ * w_), 0.0);
     d_.setZero(n_);
     inv_.assign(b_ == 1 ? static_cast<size_t>(n_) : 0, 0.0);
-    y_.assign(static_cast<size_t>(n_), 0.0);
     place_.clear();
     place_.reserve(static_cast<size_t>(A.nonZeros()));
     for (Index j = 0; j < A.outerSize(); ++j)
@@ -69,23 +67,14 @@ class BandedLDLT {
   }
 
   // Factorises the matrix given in the band's layout (size() values); false if a pivot is zero, not
-  // finite or below 1e-14 of the largest. With `rhs`, the forward substitution L y = rhs is done in
-  // the same pass (into a vector of its own: rhs is left as it is, whatever the outcome), and
-  // solve_in_place(x, true) finishes that solve: where each factorisation serves one solve (full
-  // Newton) the substitution's chain of dependent operations runs beside the factorisation's.
-  bool factorize(const double* values, const double* rhs = nullptr) {
-    auto run = [&](auto B) {
-      if (rhs)
-        factor<decltype(B)::value, true>(values, rhs);
-      else
-        factor<decltype(B)::value, false>(values, nullptr);
-    };
+  // finite or below 1e-14 of the largest.
+  bool factorize(const double* values) {
     switch (b_) {
-      case 0: run(std::integral_constant<int, 0>{}); break;
-      case 1: run(std::integral_constant<int, 1>{}); break;
-      case 2: run(std::integral_constant<int, 2>{}); break;
-      case 3: run(std::integral_constant<int, 3>{}); break;
-      default: run(std::integral_constant<int, -1>{});
+      case 0: factor<0>(values); break;
+      case 1: factor<1>(values); break;
+      case 2: factor<2>(values); break;
+      case 3: factor<3>(values); break;
+      default: factor<-1>(values);
     }
     double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
     bool finite = true;
@@ -99,22 +88,14 @@ class BandedLDLT {
     return n_ > 0 && finite && lo > 1e-14 * hi;
   }
 
-  // x <- A^{-1} x; forward_done: x is the rhs of the last factorize(), which did L y = x already.
-  void solve_in_place(double* x, bool forward_done = false) const {
-    auto run = [&](auto B) {
-      if (forward_done) {
-        std::copy(y_.begin(), y_.end(), x);
-        substitute<decltype(B)::value, false>(x);
-      } else {
-        substitute<decltype(B)::value, true>(x);
-      }
-    };
+  // x <- A^{-1} x
+  void solve_in_place(double* x) const {
     switch (b_) {
-      case 0: run(std::integral_constant<int, 0>{}); return;
-      case 1: run(std::integral_constant<int, 1>{}); return;
-      case 2: run(std::integral_constant<int, 2>{}); return;
-      case 3: run(std::integral_constant<int, 3>{}); return;
-      default: run(std::integral_constant<int, -1>{});
+      case 0: substitute<0>(x); return;
+      case 1: substitute<1>(x); return;
+      case 2: substitute<2>(x); return;
+      case 3: substitute<3>(x); return;
+      default: substitute<-1>(x);
     }
   }
 
@@ -128,15 +109,13 @@ class BandedLDLT {
   // Row by row (Cholesky's up-looking order): for j < i, t_j = A(i, j) - sum_{k < j} t_k L(j, k) with
   // t_k = L(i, k) D(k); L(i, j) = t_j / D(j); D(i) = A(i, i) - sum_k t_k L(i, k). B: b known at compile
   // time (B < 0: b_ at run time). The values are read from `a` (the band's layout) as the rows go.
-  template <int B, bool Forward>
-  void factor(const double* __restrict a, const double* __restrict rhs) {
-    double* __restrict x = y_.data();  // y = L^{-1} rhs, with Forward
+  template <int B>
+  void factor(const double* __restrict a) {
     const Index n = n_, b = B >= 0 ? B : b_, w = b + 1;
     double* __restrict L = band_.data();
     double* __restrict D = d_.data();
     if constexpr (B == 0) {
       for (Index i = 0; i < n; ++i) D[i] = L[i] = a[i];
-      if constexpr (Forward) std::copy(rhs, rhs + n, x);
     } else if constexpr (B == 1) {
       // Tridiagonal: the recurrence D(i) = A(i, i) - A(i, i-1)^2 / D(i-1) is the factorisation's critical
       // path (one division and one subtraction a row); 1 / D(i-1) and l_i = A(i, i-1) / D(i-1) are off
@@ -144,12 +123,10 @@ class BandedLDLT {
       // pace), kept for the substitutions, which then carry no division.
       double* __restrict inv = inv_.data();
       double dprev = D[0] = a[1];
-      if constexpr (Forward) x[0] = rhs[0];
       for (Index i = 1; i < n; ++i) {
         const double s = a[2 * i], r = 1.0 / dprev, l = s * r;
         inv[i - 1] = r;
         L[2 * i] = l;
-        if constexpr (Forward) x[i] = rhs[i] - l * x[i - 1];
         dprev = D[i] = a[2 * i + 1] - (s * s) / dprev;
       }
       inv[n - 1] = 1.0 / dprev;
@@ -186,36 +163,28 @@ class BandedLDLT {
         }
         D[i] = di;
         row[b] = di;
-        if constexpr (Forward) {  // y_i = rhs_i - sum_j L(i, j) y_j, row i now final
-          double y = rhs[i];
-          for (Index j = j0; j < i; ++j) y -= row[j - i + b] * x[j];
-          x[i] = y;
-        }
       }
-      (void)t, (void)x, (void)rhs;
+      (void)t;
     }
   }
 
-  template <int B, bool Forward>
+  template <int B>
   void substitute(double* __restrict x) const {
     const Index n = n_, b = B >= 0 ? B : b_, w = b + 1;
     const double* __restrict L = band_.data();
     const double* __restrict D = d_.data();
     if constexpr (B == 1) {  // L y = x, then L^T x = D^{-1} y: one multiplication and one subtraction a row each way
       const double* __restrict inv = inv_.data();
-      if constexpr (Forward)
-        for (Index i = 1; i < n; ++i) x[i] -= L[2 * i] * x[i - 1];
+      for (Index i = 1; i < n; ++i) x[i] -= L[2 * i] * x[i - 1];
       x[n - 1] *= inv[n - 1];
       for (Index i = n - 2; i >= 0; --i) x[i] = x[i] * inv[i] - L[2 * i + 2] * x[i + 1];
       return;
     }
-    if constexpr (Forward) {
-      for (Index i = 1; i < n; ++i) {  // L y = x
-        const double* row = L + i * w;
-        double s = x[i];
-        for (Index j = std::max<Index>(0, i - b); j < i; ++j) s -= row[j - i + b] * x[j];
-        x[i] = s;
-      }
+    for (Index i = 1; i < n; ++i) {  // L y = x
+      const double* row = L + i * w;
+      double s = x[i];
+      for (Index j = std::max<Index>(0, i - b); j < i; ++j) s -= row[j - i + b] * x[j];
+      x[i] = s;
     }
     for (Index i = 0; i < n; ++i) x[i] /= D[i];  // D z = y
     for (Index i = n - 2; i >= 0; --i) {  // L^T x = z
@@ -229,7 +198,6 @@ class BandedLDLT {
   std::vector<double> band_;  // row i at i (b + 1): L(i, i - b) ... L(i, i - 1), D(i)
   Vector d_;
   std::vector<double> inv_;  // b = 1: 1 / D(i), for the substitutions
-  std::vector<double> y_;    // L^{-1} rhs of the last factorize() given one
   std::vector<int> place_;  // A's k-th stored value -> the index of (i, j) or its twin (j, i) below the diagonal in band_
 };
 

@@ -114,7 +114,7 @@ class NewtonSolver {
       }
       if (refactor) {
         const IterationMatrix im = opt_.iteration == NewtonMode::initial && !linear ? p.start_matrix() : p.matrix();
-        const Status s = factorize(p, model, im, t, step, st, &r_);
+        const Status s = factorize(p, model, im, t, step, st);
         if (s != Status::success) return s;
       }
       double du_norm, x_norm;
@@ -149,8 +149,7 @@ class NewtonSolver {
   // max-norms of the increment and of the new x.
   template <class Problem>
   void iterate(Problem& p, Vector& x, Stats& st, double& du_norm, double& x_norm) {
-    ls_.solve_in_place(r_, forward_done_);  // (the factorisation just made may have started on r_)
-    forward_done_ = false;
+    ls_.solve_in_place(r_);
     ++st.num_linear_solves;
     ++st.num_newton_iters;
     const double* __restrict r = r_.data();
@@ -184,16 +183,12 @@ class NewtonSolver {
     return Status::success;
   }
 
-  // rhs: the residual the solve to come takes, which the factorisation may start on.
   template <class Problem, class ModelT>
-  Status factorize(Problem& p, ModelT& model, const IterationMatrix& im, double t, std::int64_t step, Stats& st,
-                   const Vector* rhs = nullptr) {
+  Status factorize(Problem& p, ModelT& model, const IterationMatrix& im, double t, std::int64_t step, Stats& st) {
     // A large model's factorisation can take a second: poll before it, on a clock. Polling at every one
     // takes the GIL (Python's hook) each step of a small yielding model, which serialises solve_many's threads.
     if (poll_.tick()) poll_interrupt();
-    const bool regular =
-        ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference, opt_.linear_solver, rhs);
-    forward_done_ = ls_.forward_done();
+    const bool regular = ls_.factorize(model, im, st, opt_.jacobian == Jacobian::finite_difference, opt_.linear_solver);
     if (ls_.reused())
       ++st.num_reused_factorizations;  // an S identical to the last keeps its factors
     else
@@ -211,7 +206,7 @@ class NewtonSolver {
     }
     if constexpr (has_regularization<Problem>::value) {
       IterationMatrix reg = im;
-      if (p.regularize(reg, ls_)) return factorize(p, model, reg, t, step, st);  // (without rhs: it was spoilt)
+      if (p.regularize(reg, ls_)) return factorize(p, model, reg, t, step, st);
     }
     return fail(Status::singular_matrix, t, step,
                 "singular iteration matrix at t = " + detail::fmt(t) + " (step " + std::to_string(step) + ")");
@@ -288,7 +283,6 @@ class NewtonSolver {
   Vector r_, du_;
   std::vector<double> residuals_;
   bool factorized_ = false;
-  bool forward_done_ = false;  // the last factorisation did the forward substitution on r_
   double accepted_ = std::numeric_limits<double>::quiet_NaN();
   Failure failure_;
   ClockPoll poll_;

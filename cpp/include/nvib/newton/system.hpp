@@ -2,11 +2,8 @@
 // from the model (iteration_matrix.hpp) and factorised (linalg/): dense, banded
 // or sparse, chosen once per stepper by its pattern and size (or forced) and
 // named in Stats::linear_solver. The Newton component asks it for
-//   bool factorize(model, IterationMatrix, Stats&, bool finite_difference, choice, Vector* rhs)
-//                                                       false if S is singular; rhs (optional): the
-//                                                       right-hand side of the solve to come, which a
-//                                                       factorisation may start on (forward_done())
-//   void solve_in_place(Vector& x, bool forward_done)   x <- S^{-1} x
+//   bool factorize(model, IterationMatrix, Stats&, bool finite_difference, choice)   false if S is singular
+//   void solve_in_place(Vector& x)                      x <- S^{-1} x
 //   void multiply_C(const Vector& x, Vector& out) const out = C_t x (the last tangent)
 //   Vector tangent_diagonal()                           the diagonal of the last K_t
 //   Index first_nonfinite_tangent_row() const           -1 if the last tangent is finite
@@ -54,9 +51,9 @@ class IterationSystem {
   // law on the same branch): then the factors are kept and reused() says so.
   template <class ModelT>
   bool factorize(ModelT& model, const IterationMatrix& im, Stats& st, bool finite_difference,
-                 LinearSolverChoice choice = LinearSolverChoice::automatic, const Vector* rhs = nullptr) {
+                 LinearSolverChoice choice = LinearSolverChoice::automatic) {
     if (!chosen_) choose(model, finite_difference, choice);
-    reused_ = forward_done_ = false;
+    reused_ = false;
     if (kind_ == Kind::dense) {
       if (dense_S_.size() != model.size() || S_.rows() != model.size()) {
         dense_S_.resize(model.size());
@@ -80,9 +77,8 @@ class IterationSystem {
     if (have_last_ && same(values, last_.data(), count)) return reused_ = true, last_ok_;
     if (kind_ == Kind::banded) {
       // A pivot the band cannot take without pivoting: this S goes to the sparse LU (with pivoting).
-      band_failed_ = !banded_.factorize(values, rhs ? rhs->data() : nullptr);
+      band_failed_ = !banded_.factorize(values);
       last_ok_ = !band_failed_;
-      forward_done_ = rhs && last_ok_;
       if (band_failed_) {
         SparseMatrix& S = sparse_S_.matrix();
         banded_.to_compressed(values, S);
@@ -101,14 +97,11 @@ class IterationSystem {
   }
   // The last factorize() kept the factors of an identical S.
   bool reused() const { return reused_; }
-  // The last factorize() did the forward substitution on its rhs.
-  bool forward_done() const { return forward_done_; }
-  // x <- S^{-1} x; forward_done: x is the rhs of a factorize() that says forward_done().
-  void solve_in_place(Vector& x, bool forward_done = false) const {
+  void solve_in_place(Vector& x) const {
     if (kind_ == Kind::dense)
       lu_.solve_in_place(x);
     else if (kind_ == Kind::banded && !band_failed_)
-      banded_.solve_in_place(x.data(), forward_done);
+      banded_.solve_in_place(x.data());
     else
       sparse_lu_.solve_in_place(x);
   }
@@ -206,7 +199,7 @@ class IterationSystem {
   enum class Kind { dense, banded, sparse };
   Kind kind_ = Kind::dense;
   bool chosen_ = false;
-  bool have_last_ = false, last_ok_ = false, reused_ = false, forward_done_ = false;
+  bool have_last_ = false, last_ok_ = false, reused_ = false;
   bool band_failed_ = false;  // the last S had a pivot the band cannot take: it went to the sparse LU
   bool lu_ready_ = false;     // sparse_lu_ has analysed S's pattern
   Matrix S_, last_;  // the assembled S (dense), and the S of the factors kept (dense, or the sparse values)
