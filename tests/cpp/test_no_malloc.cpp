@@ -220,6 +220,21 @@ int main() {
           for (nvib::Index i = 0; i < m; ++i) r.emplace_back(i, 1.0);
           return r;
         }(), nvib::effects::Signal::sine(20.0, 9.0))};
+    {  // a chain long enough for the streamed explicit step (Model::stream_acceleration)
+      const int big = 4 * static_cast<int>(nvib::Model<>::kStreamBlock) + 100;
+      std::vector<std::int32_t> ib, jb;
+      for (int i = 0; i < big; ++i) ib.push_back(i), jb.push_back(i - 1);
+      std::vector<nvib::effects::EffectArray> chain{
+          nvib::effects::make_effect_array("bilinear", ib, jb, {{"k", {1e3}}, {"fy", {20.0}}, {"b", {0.05}}}, big),
+          nvib::effects::make_effect_array("damper", ib, jb, {{"c", {0.5}}}, big)};
+      nvib::effects::Measure r;
+      for (nvib::Index i = 0; i < big; ++i) r.emplace_back(i, 1.0);
+      std::vector<nvib::effects::Effect> ground{nvib::effects::ground_acceleration(r, nvib::effects::Signal::sine(20.0, 9.0))};
+      const auto streamed = nvib::effects::make_effect_model(nvib::Mass::diagonal(nvib::Vector::Ones(big)), ground, chain);
+      CHECK(streamed.can_stream());
+      nvib::Vector ub = nvib::Vector::Constant(big, 0.01);
+      check_no_alloc("streamed chain, CentralDifference", nvib::CentralDifference(), streamed, &ub);
+    }
     const auto hyst = nvib::effects::make_effect_model(nvib::Mass::diagonal(nvib::Vector::Ones(m)), singles, storeys);
     CHECK(hyst.has_state() && hyst.has_sparse_tangent() && !hyst.is_linear());
     CHECK(hyst.state_size() == 100 * 3 + 4 + 4 + 32 + 3);  // bilinear, bouc_wen x2, imk, friction

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -96,8 +97,23 @@ class CompiledEffects {
   }
   const Vector& constant_load() const { return f_const_; }  // -P of the constant loads
   const std::vector<kernels::Group>& groups() const { return groups_; }
-  // Effects in the dense_first groups (their values are kept per time by EffectSet).
+  // Effects in the dense_first groups (their values are kept per time by EffectSet), and those groups
+  // (the first ones).
   std::size_t num_dense_loads() const { return dense_loads_; }
+  std::size_t num_load_groups() const {
+    std::size_t q = 0;
+    while (q < groups_.size() && groups_[q].storage == kernels::dense_first) ++q;
+    return q;
+  }
+  // The largest halo of the groups after the loads (kernels::Group::halo), -1 if one has none.
+  std::int64_t stream_halo() const {
+    std::int64_t h = 0;
+    for (std::size_t q = num_load_groups(); q < groups_.size(); ++q) {
+      if (groups_[q].halo < 0) return -1;
+      h = std::max(h, groups_[q].halo);
+    }
+    return h;
+  }
   bool uses_velocity() const { return velocity_; }
   bool uses_time() const { return uses_time_; }
   bool is_linear() const { return linear_; }
@@ -135,6 +151,7 @@ class CompiledEffects {
     std::vector<std::int32_t> i, j, first;
     std::vector<Index> idx;
     std::vector<double> c, coef, rows;
+    std::vector<double> row_value;  // dense loads: the value every entry of row k has, or NaN
     std::unique_ptr<unsigned char[]> params;
   };
 
@@ -299,6 +316,25 @@ class CompiledEffects {
     }
   }
 
+  // How far the DOFs of effect k lie from k (kernels::Group::halo): -1 for a dense row (it reaches every
+  // DOF), 0 for the dense loads (their rows go DOF by DOF).
+  static std::int64_t halo_of(const kernels::Group& g) {
+    using namespace kernels;
+    if (g.storage == dense_first) return 0;
+    if (g.storage == dense) return -1;
+    std::int64_t h = 0;
+    auto reach = [&](std::int64_t d, std::size_t k) { h = std::max<std::int64_t>(h, std::abs(d - std::int64_t(k))); };
+    for (std::size_t k = 0; k < g.size; ++k) {
+      if (g.storage == sparse) {
+        for (std::int32_t e = g.first[k]; e < g.first[k + 1]; ++e) reach(g.idx[e], k);
+      } else {
+        reach(g.i[k], k);
+        if (g.j && g.j[k] >= 0) reach(g.j[k], k);
+      }
+    }
+    return h;
+  }
+
   template <class L>
   static typename L::Params* new_params(Store& st, std::size_t count) {
     static_assert(std::is_trivially_copyable_v<typename L::Params> && std::is_trivially_destructible_v<typename L::Params>,
@@ -319,8 +355,20 @@ class CompiledEffects {
     g.idx = st.idx.empty() ? nullptr : st.idx.data();
     g.coef = st.coef.empty() ? nullptr : st.coef.data();
     g.rows = st.rows.empty() ? nullptr : st.rows.data();
+    if (g.storage == dense_first) {  // a row of one value everywhere (a ground motion of a uniform mass)
+      st.row_value.assign(g.size, std::numeric_limits<double>::quiet_NaN());
+      for (std::size_t k = 0; k < g.size; ++k) {
+        const double* w = g.rows + static_cast<Index>(k) * g.n;
+        if (std::all_of(w, w + g.n, [&](double x) { return x == w[0] && std::signbit(x) == std::signbit(w[0]); }))
+          st.row_value[k] = w[0];
+      }
+      g.row_value = st.row_value.data();
+    }
     g.params = st.params.get();
-    g.kernel = force_kernel<L>(g.storage, g.uniform);
+    g.kernel = force_kernel<L>(g);
+    g.params_bytes = g.uniform ? 0 : sizeof(typename L::Params);
+    g.state_width = law::state_width<L>();
+    g.halo = halo_of(g);
     if constexpr (L::is_load) {
       if (g.storage == dense_first) {
         g.load_values = &dense_load_values<L>;

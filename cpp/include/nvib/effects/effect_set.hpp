@@ -80,25 +80,28 @@ class EffectSet {
   // The same on contiguous storage of size(): Model calls it with its vectors' data, no Eigen::Ref formed.
   void eval(const double* up, const double* vp, double t, double* op) const {
     const auto& groups = c_->groups();
+    write_loads(t, op, 0, c_->constant_load().size());
     const double* committed = committed_.data();
     double* trial = trial_.data();
-    auto g = groups.begin();
-    if (g != groups.end() && g->storage == kernels::dense_first) {
-      // The dense loads: their values kept while t does not change (a step's Newton iterations).
-      if (!(t == load_t_)) {
-        for (auto q = g; q != groups.end() && q->storage == kernels::dense_first; ++q)
-          q->load_values(*q, t, load_f_.data() + q->load);
-        load_t_ = t;
-      }
-      for (; g != groups.end() && g->storage == kernels::dense_first; ++g)
-        kernels::add_dense_loads(*g, load_f_.data() + g->load, op);  // the first writes (constant loads too)
-    } else {
-      // A stored zero the compiler cannot see through keeps this a plain loop, not memcpy.
-      const double* base = c_->constant_load().data();
-      const double z = opaque_zero_;
-      for (Index i = 0, n = c_->constant_load().size(); i < n; ++i) op[i] = base[i] + z;
-    }
-    for (; g != groups.end(); ++g) g->kernel(*g, up, vp, t, op, committed, trial);
+    for (auto g = groups.begin() + static_cast<std::ptrdiff_t>(c_->num_load_groups()); g != groups.end(); ++g)
+      g->kernel(*g, up, vp, t, op, committed, trial);
+  }
+
+  // ---- the force block by block along the DOFs (Model's streamed explicit step) ----
+  // The loads are written first (DOF by DOF), then each group after them adds its forces: the stages
+  // of the stream, in order. A group's effect k reaches DOFs within halo of k, so that the stages can
+  // run block by block behind the DOFs being prepared: stream_halo(), -1 where some effect reaches
+  // anywhere (a dense measure).
+  std::int64_t stream_halo() const { return c_->stream_halo(); }
+  std::size_t stream_stages() const { return c_->groups().size() - c_->num_load_groups(); }
+  std::size_t stage_size(std::size_t s) const { return c_->groups()[c_->num_load_groups() + s].size; }
+  // out[q0 .. q1): the constant and dense loads at t (eval()'s first writes).
+  void stream_loads(double t, double* out, Index q0, Index q1) const { write_loads(t, out, q0, q1); }
+  // Stage s: effects k0 .. k1 - 1 of its group add their forces.
+  void stream_stage(std::size_t s, const double* u, const double* v, double t, double* out, std::size_t k0,
+                    std::size_t k1) const {
+    const kernels::Group g = c_->groups()[c_->num_load_groups() + s].range(k0, k1);
+    g.kernel(g, u, v, t, out, committed_.data(), trial_.data());
   }
   void tangent(const CVecRef& u, const CVecRef& v, double t, MatRef K, MatRef C) const {
     double *k = K.data(), *c = C.data();
@@ -386,6 +389,25 @@ class EffectSet {
   }
 
  private:
+  // out[q0 .. q1) = the constant loads plus the dense loads at t, their values kept while t does not
+  // change (a step's Newton iterations evaluate the force several times at one time).
+  void write_loads(double t, double* op, Index q0, Index q1) const {
+    const auto& groups = c_->groups();
+    const std::size_t nl = c_->num_load_groups();
+    if (nl > 0) {
+      if (!(t == load_t_)) {
+        for (std::size_t q = 0; q < nl; ++q) groups[q].load_values(groups[q], t, load_f_.data() + groups[q].load);
+        load_t_ = t;
+      }
+      for (std::size_t q = 0; q < nl; ++q)
+        kernels::add_dense_loads(groups[q], load_f_.data() + groups[q].load, op, q0, q1);  // the first writes
+    } else {
+      // A stored zero the compiler cannot see through keeps this a plain loop, not memcpy.
+      const double* base = c_->constant_load().data();
+      const double z = opaque_zero_;
+      for (Index i = q0; i < q1; ++i) op[i] = base[i] + z;
+    }
+  }
   std::string known_names() const {
     std::string names;
     for (const Effect& e : effects())

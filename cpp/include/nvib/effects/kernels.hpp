@@ -47,6 +47,7 @@ struct Group {
   const Index* idx = nullptr;
   const double* coef = nullptr;
   const double* rows = nullptr;  // dense: row k at rows + k n
+  const double* row_value = nullptr;  // dense_first: the value of every entry of row k, or NaN (not one)
   Index n = 0;
   const double* constant_load = nullptr;  // dense_first: written with the first load (nullptr: none)
   const void* params = nullptr;           // L::Params[size], or [1] if uniform
@@ -55,6 +56,26 @@ struct Group {
   // dense_first: the loads' values f_k(t), and where the group's first sits among every dense load's
   void (*load_values)(const Group&, double t, double* f) = nullptr;
   std::size_t load = 0;
+  // How far effect k's DOFs lie from DOF k (-1: anywhere; a dense row), so that the force can be
+  // evaluated block by block along the DOFs (EffectSet's streamed evaluation); the sizes of one
+  // effect's parameters (0 if uniform) and state, to take a range of the group (range()).
+  std::int64_t halo = -1;
+  std::size_t params_bytes = 0, state_width = 0;
+
+  // Effects k0 .. k1 - 1 of this group as a group of their own (the same storage, parameters and
+  // states, offset).
+  Group range(std::size_t k0, std::size_t k1) const {
+    Group r = *this;
+    r.size = k1 - k0;
+    if (i) r.i = i + k0;
+    if (j) r.j = j + k0;
+    if (c) r.c = c + 2 * k0;
+    if (first) r.first = first + k0;
+    if (rows) r.rows = rows + static_cast<Index>(k0) * n;
+    if (!uniform) r.params = static_cast<const unsigned char*>(params) + k0 * params_bytes;
+    r.state = state + k0 * state_width;
+    return r;
+  }
 
   template <class L>
   const typename L::Params& params_of(std::size_t k) const {
@@ -166,25 +187,43 @@ template <class L>
 void dense_load_values(const Group& g, double t, double* f) {
   for (std::size_t k = 0; k < g.size; ++k) f[k] = L::value(g.params_of<L>(k), 0.0, 0.0, t);
 }
-inline void add_dense_loads(const Group& g, const double* f, double* __restrict out) {
+inline void add_dense_loads(const Group& g, const double* f, double* __restrict out, Index q0, Index q1) {
   std::size_t k = 0;
-  const Index n = g.n;
+  const Index n = g.n, m = q1 - q0;
+  out += q0;
+  // Row k's entry q: w[q], or its one value where it has one (then the row is not read: as exact, one
+  // stream less).
+  auto one_value = [&](std::size_t r) { return g.row_value != nullptr && !std::isnan(g.row_value[r]); };
   if (g.writes && g.size > 0) {
     const double f0 = f[0];
-    const double* __restrict w = g.rows;
-    if (g.constant_load == nullptr) {  // one stream less: no constant vector to read
-      detail::for_each_index(n, [=](Index q) { out[q] = w[q] * f0; });
+    const double* __restrict w = g.rows + q0;
+    const double* __restrict base = g.constant_load ? g.constant_load + q0 : nullptr;
+    if (one_value(0)) {
+      const double w0 = g.row_value[0];
+      if (base == nullptr)  // one stream less: no constant vector to read
+        detail::for_each_index(m, [=](Index q) { out[q] = w0 * f0; });
+      else
+        detail::for_each_index(m, [=](Index q) { out[q] = base[q] + w0 * f0; });
+    } else if (base == nullptr) {
+      detail::for_each_index(m, [=](Index q) { out[q] = w[q] * f0; });
     } else {
-      const double* __restrict base = g.constant_load;
-      detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w[q] * f0; });
+      detail::for_each_index(m, [=](Index q) { out[q] = base[q] + w[q] * f0; });
     }
     k = 1;
   }
   for (; k < g.size; ++k) {
     const double fk = f[k];
-    const double* __restrict w = g.rows + static_cast<Index>(k) * n;
-    for (Index q = 0; q < n; ++q) out[q] += w[q] * fk;
+    if (one_value(k)) {
+      const double wk = g.row_value[k];
+      for (Index q = 0; q < m; ++q) out[q] += wk * fk;
+    } else {
+      const double* __restrict w = g.rows + static_cast<Index>(k) * n + q0;
+      for (Index q = 0; q < m; ++q) out[q] += w[q] * fk;
+    }
   }
+}
+inline void add_dense_loads(const Group& g, const double* f, double* __restrict out) {
+  add_dense_loads(g, f, out, 0, g.n);
 }
 using LoadValues = void (*)(const Group&, double t, double* f);
 
@@ -269,6 +308,76 @@ ForceKernel force_kernel(Storage s, bool uniform) {
   }
   return &add_forces<L, sparse, false>;
 }
+
+// A chain of effects along consecutive DOFs (pair or mixed storage with i_k = i_0 + k and j_k = i_k - 1,
+// j_0 = -1 allowed: the storeys of a shear building, the links of a chain): DOF i_k
+// receives f_k from effect k, then -f_{k+1} from effect k + 1, which the general loop adds through
+// memory one effect after the other, each waiting on the store of the one before. Here each DOF's two
+// contributions are summed in a register, in that order, and stored once: the same operations in the
+// same order, without the chain of stores.
+template <class L, bool Uniform>
+void add_chain_forces(const Group& g, const double* u, const double* v, double t, double* out, const double* committed,
+                      double* trial) {
+  const std::size_t size = g.size;
+  if (size == 0) return;
+  const auto* __restrict P = static_cast<const typename L::Params*>(g.params);
+  const double* __restrict up = u;
+  const double* __restrict vp = v;
+  const std::int32_t i0 = g.i[0];
+  double* __restrict op = out + i0;  // op[k]: the DOF of effect k's i side
+  constexpr std::size_t W = law::state_width<L>();
+  const double* __restrict cs = W > 0 && committed ? committed + g.state : committed;
+  double* __restrict ts = W > 0 && trial ? trial + g.state : nullptr;
+  const bool grounded = g.j[0] < 0;  // (pair and mixed storage: j is stored)
+  // The forces of a chunk of effects into a buffer (a loop without dependences between effects), then
+  // each DOF's two contributions, f_k - f_{k+1}, in a second loop; the last force of a chunk is carried.
+  constexpr std::size_t kChunk = 256;
+  double f[kChunk + 1];
+  auto loop = [&](auto with_trial) {
+    constexpr bool T = decltype(with_trial)::value;
+    auto force = [&](std::size_t k, auto ground) {
+      const std::int32_t i = i0 + static_cast<std::int32_t>(k);
+      double d = 0.0, dd = 0.0;
+      if constexpr (L::uses_displacement) d = decltype(ground)::value ? up[i] - 0.0 : up[i] - up[i - 1];
+      if constexpr (L::uses_velocity) dd = decltype(ground)::value ? vp[i] - 0.0 : vp[i] - vp[i - 1];
+      return respond<L, T>(P[Uniform ? 0 : k], d, dd, t, cs + k * W, T ? ts + k * W : nullptr);
+    };
+    f[0] = grounded ? force(0, std::true_type{}) : force(0, std::false_type{});
+    if (!grounded) op[-1] -= f[0];
+    for (std::size_t c0 = 0; c0 < size; c0 += kChunk) {
+      const std::size_t m = std::min(kChunk, size - c0);  // effects c0 .. c0 + m - 1 add to op[c0 ..]
+      const std::size_t next = std::min(m, size - 1 - c0);  // the forces after them known in this chunk
+      for (std::size_t q = 1; q <= next; ++q) f[q] = force(c0 + q, std::false_type{});
+      double* __restrict o = op + c0;
+      for (std::size_t q = 0; q < next; ++q) o[q] = o[q] + f[q] - f[q + 1];
+      if (next < m) o[m - 1] += f[m - 1];  // the chain's last effect
+      f[0] = f[m];
+    }
+  };
+  if (W > 0 && ts)
+    loop(std::true_type{});
+  else
+    loop(std::false_type{});
+}
+
+// Whether a group of differences of two DOFs (the first may be to the ground) is a chain along
+// consecutive DOFs (add_chain_forces).
+inline bool is_chain(const Group& g) {
+  if (!(g.storage == pair || g.storage == mixed) || g.size < 2) return false;
+  for (std::size_t k = 0; k < g.size; ++k) {
+    if (g.i[k] != g.i[0] + static_cast<std::int64_t>(k)) return false;
+    const bool first_grounded = k == 0 && g.j[k] < 0;
+    if (!first_grounded && g.j[k] != g.i[k] - 1) return false;
+  }
+  return true;
+}
+
+template <class L>
+ForceKernel force_kernel(const Group& g) {
+  if (is_chain(g)) return g.uniform ? &add_chain_forces<L, true> : &add_chain_forces<L, false>;
+  return force_kernel<L>(g.storage, g.uniform);
+}
+
 
 // (d, d') of effect k, the storage known at run time.
 template <class L>

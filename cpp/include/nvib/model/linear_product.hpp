@@ -28,6 +28,7 @@ class LinearProduct {
     C_ = C;
     K_.makeCompressed();
     C_.makeCompressed();
+    reach_ = std::max(reach_of(K_), reach_of(C_));
     const int bk = band_of(K_, n_), bc = band_of(C_, n_);
     if (bk >= kNone && bc >= kNone && !(bk == kNone && bc == kNone)) {
       kb_ = band_values(K_, bk, n_);
@@ -42,16 +43,26 @@ class LinearProduct {
   }
 
   // out += K u + C v (arrays of n doubles; out apart from u and v).
-  void add(const double* u, const double* v, double* out) const { kernel_(*this, u, v, out); }
+  void add(const double* u, const double* v, double* out) const { kernel_(*this, u, v, out, 0, n_); }
+  // The same for rows r0 .. r1 - 1 only (they read u and v within reach() of the rows).
+  void add(const double* u, const double* v, double* out, Index r0, Index r1) const { kernel_(*this, u, v, out, r0, r1); }
   // The band form is used (else the compressed rows).
   bool banded() const { return banded_; }
+  // How far from its row a row's entries lie: max |i - j| over the stored entries of K and C.
+  Index reach() const { return reach_; }
 
  private:
-  using Kernel = void (*)(const LinearProduct&, const double*, const double*, double*);
+  using Kernel = void (*)(const LinearProduct&, const double*, const double*, double*, Index, Index);
   static constexpr int kNone = -1;     // no matrix
   static constexpr int kGeneral = -2;  // not a complete band of half-width <= 2
   static constexpr int kMaxBand = 2;
 
+  static Index reach_of(const RowMatrix& A) {
+    Index r = 0;
+    for (Index i = 0; i < A.outerSize(); ++i)
+      for (RowMatrix::InnerIterator it(A, i); it; ++it) r = std::max<Index>(r, std::abs(it.col() - i));
+    return r;
+  }
   // The half-width B of A's band if every position of it is stored (rows i, columns max(0, i - B) ..
   // min(n - 1, i + B), nothing else): -1 if A stores nothing, -2 if A is not such a band.
   static int band_of(const RowMatrix& A, Index n) {
@@ -92,13 +103,13 @@ class LinearProduct {
   }
   template <int BK, int BC>
   static void add_band(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
-                       double* __restrict out) {
+                       double* __restrict out, Index r0, Index r1) {
     constexpr int B = BK > BC ? (BK > 0 ? BK : 0) : (BC > 0 ? BC : 0);
     const Index n = p.n_;
     const double* __restrict kb = p.kb_.data();
     const double* __restrict cb = p.cb_.data();
-    const Index head = std::min<Index>(B, n), tail = std::max<Index>(head, n - B);
-    for (Index i = 0; i < head; ++i)
+    const Index head = std::min<Index>(std::max<Index>(B, r0), r1), tail = std::max<Index>(head, std::min<Index>(n - B, r1));
+    for (Index i = r0; i < head; ++i)
       out[i] = band_row_checked<BC>(band_row_checked<BK>(out[i], kb, u, i, n), cb, v, i, n);
     // The interior rows: every column of the band inside the matrix, the widths known here.
     for (Index i = head; i < tail; ++i) {
@@ -109,17 +120,17 @@ class LinearProduct {
         for (int o = -BC; o <= BC; ++o) s += cb[(o + BC) * n + i] * v[i + o];
       out[i] = s;
     }
-    for (Index i = tail; i < n; ++i)
+    for (Index i = tail; i < r1; ++i)
       out[i] = band_row_checked<BC>(band_row_checked<BK>(out[i], kb, u, i, n), cb, v, i, n);
     (void)kb, (void)cb, (void)u, (void)v;
   }
   static void add_rows(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
-                       double* __restrict out) {
+                       double* __restrict out, Index r0, Index r1) {
     const RowMatrix &K = p.K_, &C = p.C_;
     const int *ko = K.outerIndexPtr(), *ki = K.innerIndexPtr(), *co = C.outerIndexPtr(), *ci = C.innerIndexPtr();
     const double *kv = K.valuePtr(), *cv = C.valuePtr();
     const bool k = K.nonZeros() > 0, c = C.nonZeros() > 0;
-    for (Index i = 0, n = p.n_; i < n; ++i) {
+    for (Index i = r0; i < r1; ++i) {
       double s = out[i];
       if (k)
         for (int q = ko[i], e = ko[i + 1]; q < e; ++q) s += kv[q] * u[ki[q]];
@@ -146,7 +157,7 @@ class LinearProduct {
     }
   }
 
-  Index n_ = 0;
+  Index n_ = 0, reach_ = 0;
   RowMatrix K_, C_;
   std::vector<double> kb_, cb_;
   Kernel kernel_ = &add_rows;

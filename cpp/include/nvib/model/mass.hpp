@@ -44,6 +44,7 @@ class Mass {
     data->d = m;
     data->dinv = m.cwiseInverse();
     data->ndinv = -data->dinv;
+    data->uniform = (m.array() == m[0]).all();
     data->warning = near_singular(m, m, name, "mass");
     return Mass(std::move(data));
   }
@@ -189,6 +190,10 @@ class Mass {
   static void scale(Index n, double* __restrict p, const double* __restrict w) {
     detail::for_each_index(n, [=](Index i) { p[i] *= w[i]; });
   }
+  // -1 / m_i of a lumped mass: x_i *= it is solve_negated_in_place().
+  const Vector& negated_inverse() const { return data_->ndinv; }
+  // A lumped mass of one value for every DOF (then negated_inverse() is that of its first).
+  bool is_uniform() const { return data_->kind == Kind::diagonal && data_->uniform; }
 
   // S += c M (S dense)
   void add_to(MatRef S, double c) const {
@@ -275,6 +280,7 @@ class Mass {
   // What never changes after construction: shared by the copies (one per stepper).
   struct Data {
     Kind kind = Kind::diagonal;
+    bool uniform = false;
     Vector d, dinv, ndinv;
     Matrix M;
     SparseMatrix S;

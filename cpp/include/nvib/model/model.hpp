@@ -136,6 +136,14 @@ template <class F>
 struct has_magnitude<F, std::void_t<decltype(std::declval<F&>().magnitude(
                             std::declval<const CVecRef&>(), std::declval<const CVecRef&>(), 0.0,
                             std::declval<VecRef>()))>> : std::true_type {};
+// A force that can be evaluated block by block along the DOFs (EffectSet: stream_halo(), stream_stages(),
+// stage_size(), stream_loads(), stream_stage()).
+template <class F, class = void>
+struct has_stream : std::false_type {};
+template <class F>
+struct has_stream<F, std::void_t<decltype(std::declval<const F&>().stream_halo()),
+                                 decltype(std::declval<const F&>().stream_stage(0, nullptr, nullptr, 0.0, nullptr, 0, 0))>>
+    : std::true_type {};
 // A force whose magnitude() evaluates the force again (a Python callable inside) says so.
 template <class F, class = void>
 struct magnitude_evaluates_force : std::false_type {};
@@ -279,6 +287,69 @@ class Model {
   void acceleration(const Vector& u, const Vector& v, double t, Vector& a, Stats& st) {
     force_into(u, v, t, a, st);
     mass_.solve_negated_in_place(a);
+  }
+
+  // ---- the streamed explicit step ----
+  // The acceleration of a lumped-mass model, block by block along the DOFs, between a scheme's update of
+  // u (prepare(p, q): DOFs p .. q-1 of u, and of v where the forces read it, made ready) and of v
+  // (finish(p, q): the force K u + C v + f of DOFs p .. q-1 is final in a, which the scheme divides by
+  // the mass, a_i *= mass().negated_inverse()_i, as it uses it), so that an explicit step makes one pass over memory
+  // instead of one per stage (update u, loads, each group of effects, K u + C v, mass, update v).
+  // Possible where every effect reaches DOFs within a bounded distance of its index and K and C are
+  // within a band (a chain, a shear building, arrays along the DOFs): can_stream(). The stages run
+  // behind the prepared DOFs, each a block behind the one before it, so that every DOF receives its
+  // forces in the order eval() adds them: the same bits as acceleration().
+  static constexpr Index kStreamBlock = 2048;
+  bool can_stream() const {
+    if (!stream_allowed_) return false;
+    if constexpr (traits::has_stream<Force>::value) {
+      const std::int64_t h = f_.stream_halo();
+      const Index reach = std::max<Index>(static_cast<Index>(h), lin_->product.reach());
+      return mass_.is_diagonal() && h >= 0 && 4 * reach <= kStreamBlock && size() >= 4 * kStreamBlock;
+    }
+    return false;
+  }
+  // Off: the steppers made from this model take the stage-by-stage path (tests, benchmarks).
+  void allow_stream(bool on) { stream_allowed_ = on; }
+
+  template <class Prepare, class Finish>
+  void stream_acceleration(const double* u, const double* v, double t, double* a, Stats& st, Prepare&& prepare,
+                           Finish&& finish) {
+    if constexpr (traits::has_stream<Force>::value) {
+      ++st.num_force_evals;
+      const Index n = size(), B = kStreamBlock;
+      const Index reach = std::max<Index>(static_cast<Index>(f_.stream_halo()), lin_->product.reach());
+      const std::size_t effect_stages = f_.stream_stages();
+      const bool linear = has_K_ || has_C_;
+      const std::size_t stages = effect_stages + (linear ? 1 : 0);
+      Index prepared = 0, finished = 0;
+      for (Index b = 0; finished < n; ++b) {
+        const Index ready = std::min<Index>(n, (b + 1) * B + reach);
+        if (ready > prepared) {
+          prepare(prepared, ready);
+          f_.stream_loads(t, a, prepared, ready);
+          prepared = ready;
+        }
+        Index complete = prepared;  // the DOFs every stage is done with
+        for (std::size_t s = 0; s < stages; ++s) {
+          const Index blk = b - static_cast<Index>(s), size_s = s < effect_stages ? static_cast<Index>(f_.stage_size(s)) : n;
+          const Index k0 = std::max<Index>(0, blk * B), k1 = std::min<Index>(size_s, std::max<Index>(0, (blk + 1) * B));
+          if (k1 > k0) {
+            if (s < effect_stages)
+              f_.stream_stage(s, u, v, t, a, static_cast<std::size_t>(k0), static_cast<std::size_t>(k1));
+            else
+              lin_->product.add(u, v, a, k0, k1);
+          }
+          if (k1 < size_s) complete = std::min<Index>(complete, std::max<Index>(0, k1 - reach));
+        }
+        if (complete > finished) {
+          finish(finished, complete);
+          finished = complete;
+        }
+      }
+    } else {
+      (void)u, (void)v, (void)t, (void)a, (void)st, (void)prepare, (void)finish;
+    }
   }
 
   // out_i = sum of |terms| of (K u + C v + f)_i: the scale of its round-off
@@ -490,6 +561,7 @@ class Model {
   Force f_{};
   bool has_K_ = false, has_C_ = false;
   bool uses_velocity_ = false, uses_time_ = false, is_linear_ = true;
+  bool stream_allowed_ = true;
   Vector fu_, fv_, fp_, fm_;  // finite-difference workspace (sized on first use)
   Vector work_;               // energy accounting (sized on first use)
   void work(Index n) {

@@ -49,6 +49,9 @@ class StepperBase {
   const Failure& failure() const { return failure_; }
   ModelT& model() { return model_; }
   const ModelT& model() const { return model_; }
+  // max |u_i| after the last step, where the step measured it as it updated u (NaN if some u_i is not
+  // finite); negative where it did not: the loop's divergence test then reads u itself.
+  double measured_max_u() const { return max_u_; }
 
   // Variable steps (adaptive runs, solve/adaptive.hpp). set_dt(h) makes the next steps h long from the
   // current time on; a stepper that carries a history at its step (a_{n-1}, PIM's remainders) hides it
@@ -87,6 +90,7 @@ class StepperBase {
     nt_ = ck.nt;
     model_.set_state(ck.laws.data());
     failure_ = Failure{};
+    max_u_ = -1.0;
   }
 
   // The carried state as one vector: [u; v; a] (3n), followed by the history
@@ -151,6 +155,7 @@ class StepperBase {
     v_ = x.segment(n, n);
     a_ = x.segment(2 * n, n);
     failure_ = Failure{};
+    max_u_ = -1.0;
   }
 
   void check_initial(double t0, const Vector& u0, const Vector& v0) const {
@@ -172,6 +177,7 @@ class StepperBase {
     u_ = u0;
     v_ = v0;
     failure_ = Failure{};
+    max_u_ = -1.0;
     model_.reset_state();
     model_.acceleration(u_, v_, t0_, a_, stats_);
     model_.commit(u_, v_, t0_, true);
@@ -214,6 +220,7 @@ class StepperBase {
   };
   std::array<Checkpoint, kCheckpoints> ck_;
   Vector u_, v_, a_;
+  double max_u_ = -1.0;  // measured_max_u()
   Stats stats_;
   Failure failure_;
 };

@@ -128,6 +128,13 @@ inline bool displacement_ok(const Vector& u, double bound) {
   detail::for_each_index(u.size(), [&ok, p, finite_bound](Index i) { ok &= std::abs(p[i]) <= finite_bound; });
   return ok;
 }
+// The same test after a step, on the largest |u_i| the step measured where it did (measured_max_u()).
+template <class Stepper>
+bool stepped_displacement_ok(const Stepper& st, double bound) {
+  const double m = st.measured_max_u();
+  if (m >= 0.0) return m <= std::min(bound, std::numeric_limits<double>::max());
+  return displacement_ok(st.u(), bound);  // (not measured, or not finite: the whole test)
+}
 // Every entry of v and a finite.
 inline bool rates_ok(const Vector& v, const Vector& a) {
   return !((detail::nonfinite_bits(v) | detail::nonfinite_bits(a)) >> 63);
@@ -368,7 +375,7 @@ Result integrate(Stepper& st, double t_end, const SolveOptions& opt, Observer&& 
         // u every step; v and a where a state is saved. A non-finite v_n or a_n makes u_{n+1}
         // non-finite in every scheme, so a run still stops within one step, and no saved row holds a
         // non-finite value.
-        if (!displacement_ok(st.u(), bound) || (saving && !rates_ok(st.v(), st.a()))) {
+        if (!stepped_displacement_ok(st, bound) || (saving && !rates_ok(st.v(), st.a()))) {
           res.failure = divergence(st, i, bound, why);
           s = Status::diverged;
         }
