@@ -314,6 +314,13 @@ class CompiledEffects {
         finish_group<Lw>(g, st, state_size);
       });
     }
+    for (std::size_t q = 0; q < groups_.size(); ++q) {
+      kernels::Group& g = groups_[q];
+      if (group_arrays_[q] != npos)
+        g.uses_time = arrays_[group_arrays_[q]].uses_time();
+      else
+        for (std::uint32_t e : members_[q]) g.uses_time = g.uses_time || all_[e].uses_time();
+    }
   }
 
   // How far the DOFs of effect k lie from k (kernels::Group::halo): -1 for a dense row (it reaches every

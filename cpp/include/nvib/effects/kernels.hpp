@@ -39,6 +39,7 @@ struct Group {
   Storage storage = sparse;
   bool uniform = false;  // one set of parameters for every effect
   bool writes = false;   // dense_first: the group's first effect writes the force vector
+  bool uses_time = false;  // some effect's force depends on t
   std::size_t size = 0;
   const std::int32_t* i = nullptr;  // ground, pair, two, mixed
   const std::int32_t* j = nullptr;  // pair, two, mixed
@@ -497,6 +498,23 @@ void tangent_values(const Group& g, const double* u, const double* v, double t, 
     }
   }
   (void)g, (void)u, (void)v, (void)t, (void)K, (void)C, (void)committed;
+}
+
+// kd_r += df/dd g_r g_r for every effect and every entry r of its measure (the diagonal entries of
+// tangent_values(), summed by DOF): the diagonal of K_t without its list of entries.
+template <class L>
+void add_tangent_diagonal(const Group& g, const double* u, const double* v, double t, double* kd, const double* committed) {
+  if constexpr (!L::is_load && L::uses_displacement) {
+    for (std::size_t k = 0; k < g.size; ++k) {
+      const double s = slopes_at<L>(g, k, u, v, t, committed).kd;
+      g.for_each_entry(k, [&](Index r, double gr) {
+        g.for_each_entry(k, [&](Index c, double gc) {
+          if (r == c) kd[r] += s * gr * gc;
+        });
+      });
+    }
+  }
+  (void)g, (void)u, (void)v, (void)t, (void)kd, (void)committed;
 }
 
 // out_i += |g_i f| for every effect: the round-off scale of the force.

@@ -71,25 +71,14 @@ double load_displacement_scale(const ModelT& model, double t0, double t1) {
   const double T = std::abs(t1 - t0);
   if (set == nullptr || !(T > 0.0) || !std::isfinite(T)) return 0.0;
   const Index n = model.size();
-  effects::EffectSet probe = *set;
+  const Vector peak = set->rest_force_peak(t0, t1, set->uses_time() ? 64 : 0);
   const Vector zero = Vector::Zero(n);
-  Vector f(n), peak = Vector::Zero(n);
-  const int samples = set->uses_time() ? 64 : 0;
-  for (int k = 0; k <= samples; ++k) {
-    const double t = samples == 0 ? t0 : t0 + (t1 - t0) * static_cast<double>(k) / samples;
-    probe.eval(zero.data(), zero.data(), t, f.data());
-    peak = peak.cwiseMax(f.cwiseAbs());
-  }
   Vector kd = Vector::Zero(n);
   if (model.has_K()) kd = model.K().diagonal();
-  {
-    std::vector<Entry> ke, ce;
-    probe.tangent_entries(ke, ce);
-    std::vector<double> kv(ke.size()), cv(ce.size());
-    probe.tangent_values(zero, zero, t0, kv.data(), cv.data());
-    for (size_t k = 0; k < ke.size(); ++k)
-      if (ke[k].row == ke[k].col && std::isfinite(kv[k])) kd[ke[k].row] += kv[k];
-  }
+  Vector effects_kd = Vector::Zero(n);
+  set->add_tangent_diagonal(zero.data(), zero.data(), t0, effects_kd.data());
+  for (Index i = 0; i < n; ++i)
+    if (std::isfinite(effects_kd[i])) kd[i] += effects_kd[i];
   const Vector hold = kd.cwiseMax(0.0) + model.mass().diagonal_entries().cwiseAbs() / (T * T);
   double scale = 0.0;
   for (Index i = 0; i < n; ++i)
