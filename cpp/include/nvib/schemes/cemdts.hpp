@@ -76,6 +76,23 @@ class CEMDTSStepper : public TwoLevelStepper<ModelT> {
     const double cu = (0.5 + eta) * h2, cp = eta * h2;                                // u
     const double vn = (0.5 - eta) * h_, va = (0.5 + 2.0 * eta) * h_, vp = eta * h_;  // v
     const Index n = u_.size();
+    if (stream_) {  // the same updates, block by block along the DOFs around the force (streamed_step)
+      double *u = u_.data(), *v = v_.data(), *a = a_.data(), *ap = aprev_.data(), *an = anew_.data(), *vs = vstar_.data();
+      const bool velocity = model_.uses_velocity();
+      const double ca = (1.0 + eta) * h_;
+      this->streamed_step(
+          velocity ? vs : v, t1, an,
+          [=](Index p, Index q) {
+            if (velocity)
+              drift_predict(q - p, u + p, vs + p, v + p, a + p, ap + p, h, cu, cp, ca, vp);
+            else
+              drift(q - p, u + p, v + p, a + p, ap + p, h, cu, cp);
+          },
+          [=](Index p, Index q) { kick(q - p, v + p, an + p, a + p, ap + p, vn, va, vp); });
+      aprev_.swap(a_);
+      a_.swap(anew_);
+      return this->advance();
+    }
     if (model_.uses_velocity()) {
       drift_predict(n, u_.data(), vstar_.data(), v_.data(), a_.data(), aprev_.data(), h, cu, cp, (1.0 + eta) * h_, vp);
       model_.acceleration(u_, vstar_, t1, anew_, stats_);

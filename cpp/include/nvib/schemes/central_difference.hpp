@@ -11,10 +11,7 @@
 // order with damping. Both variants give the same displacements.
 #pragma once
 
-#include <algorithm>
 #include <array>
-#include <cmath>
-#include <limits>
 #include <string>
 
 #include "scheme.hpp"
@@ -56,7 +53,7 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
 
  public:
   CentralDifferenceStepper(const CentralDifference& scheme, ModelT model, double h)
-      : Base(std::move(model), h), scheme_(scheme), stream_(model_.can_stream()) {
+      : Base(std::move(model), h), scheme_(scheme) {
     anew_.setZero(this->size());
     vstar_.setZero(this->size());
   }
@@ -71,29 +68,19 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
     if (scheme_.velocity == CentralDifference::Velocity::synchronized) {
       const double c = 0.5 * h_ * h_, h = h_, hh = 0.5 * h_;
       const Index n = u_.size();
-      if (stream_) {  // the same updates, block by block along the DOFs around the force (Model::stream_acceleration)
+      if (stream_) {  // the same updates, block by block along the DOFs around the force (streamed_step)
         double *u = u_.data(), *v = v_.data(), *a = a_.data(), *an = anew_.data(), *vs = vstar_.data();
-        const double* ndinv = model_.mass().negated_inverse().data();
-        const bool uniform = model_.mass().is_uniform(), velocity = model_.uses_velocity();
-        double umax = 0.0;
-        bool finite = true;
-        model_.stream_acceleration(
-            u, velocity ? vs : v, t1, an, stats_,
-            [&](Index p, Index q) {
+        const bool velocity = model_.uses_velocity();
+        this->streamed_step(
+            velocity ? vs : v, t1, an,
+            [=](Index p, Index q) {
               if (velocity)
                 drift_predict(q - p, u + p, vs + p, v + p, a + p, h, c);
               else
                 drift(q - p, u + p, v + p, a + p, h, c);
-              largest(q - p, u + p, umax, finite);  // (the loop's divergence test, on DOFs still in cache)
             },
-            [=](Index p, Index q) {
-              if (uniform)  // (one mass: one inverse, no array to read)
-                solve_and_kick(q - p, v + p, a + p, an + p, ndinv[0], hh);
-              else
-                solve_and_kick(q - p, v + p, a + p, an + p, ndinv + p, hh);
-            });
+            [=](Index p, Index q) { kick(q - p, v + p, a + p, an + p, hh); });
         a_.swap(anew_);
-        this->max_u_ = finite ? umax : std::numeric_limits<double>::quiet_NaN();
         return this->advance();
       }
       if (model_.uses_velocity()) {  // u and the velocity predictor in one pass over memory
@@ -140,30 +127,6 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
   static void kick(Index n, double* __restrict v, const double* __restrict a, const double* __restrict an, double hh) {
     detail::for_each_index(n, [=](Index i) { v[i] += hh * (a[i] + an[i]); });
   }
-  // The lumped mass solve (a_new = -f / m, as Mass::solve_negated_in_place) and the kick in one loop.
-  static void solve_and_kick(Index n, double* __restrict v, const double* __restrict a, double* __restrict an,
-                             const double* __restrict ndinv, double hh) {
-    for (Index i = 0; i < n; ++i) {
-      an[i] *= ndinv[i];
-      v[i] += hh * (a[i] + an[i]);
-    }
-  }
-  static void solve_and_kick(Index n, double* __restrict v, const double* __restrict a, double* __restrict an,
-                             double ndinv, double hh) {
-    for (Index i = 0; i < n; ++i) {
-      an[i] *= ndinv;
-      v[i] += hh * (a[i] + an[i]);
-    }
-  }
-  // m = max(m, |u_i|), finite = false if some u_i is not finite (loops the compiler vectorises: a
-  // conjunction of comparisons, as displacement_ok, and Eigen's maximum).
-  static void largest(Index n, const double* __restrict u, double& m, bool& finite) {
-    bool ok = true;
-    for (Index i = 0; i < n; ++i) ok &= std::abs(u[i]) <= std::numeric_limits<double>::max();
-    finite = finite && ok;
-    if (n > 0) m = std::max(m, Eigen::Map<const Vector>(u, n).cwiseAbs().maxCoeff());
-  }
-
   // Variable steps: the synchronized form is one-step; half_step carries v_{n-1/2}, and its next kick
   // must be (h_{n-1} + h_n)/2 a_n, so the carried velocity is moved by (h_{n-1} - h_n)/2 a_n.
   void set_dt(double h) {
@@ -189,7 +152,6 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
 
  private:
   CentralDifference scheme_;
-  bool stream_ = false;  // the model can be stepped in one pass (Model::can_stream())
   Vector anew_, vstar_;
   bool first_ = true;
   std::array<bool, Base::kCheckpoints> ck_first_{true, true, true, true};

@@ -6,7 +6,10 @@
 // reaches it, so it leaves every internal variable as it was.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +22,7 @@ namespace nvib {
 // Brings the base's state into a derived stepper (a dependent base hides it).
 #define NVIB_STEPPER_STATE(Base) \
   using Base::a_;                \
+  using Base::stream_;           \
   using Base::h_;                \
   using Base::model_;            \
   using Base::n_;                \
@@ -29,7 +33,7 @@ namespace nvib {
 template <class ModelT>
 class StepperBase {
  public:
-  StepperBase(ModelT model, double h) : model_(std::move(model)), h_(h) {
+  StepperBase(ModelT model, double h) : model_(std::move(model)), stream_(model_.can_stream()), h_(h) {
     check_time_step(h);
     const Index n = model_.size();
     u_.setZero(n);
@@ -201,6 +205,44 @@ class StepperBase {
     return Status::success;
   }
 
+  // An explicit scheme's step in one pass over memory where the model can (Model::stream_acceleration):
+  // drift(p, q) updates u (and what the forces read of the velocity: forces_v) of DOFs p .. q-1, the
+  // force goes to anew, which is divided by the lumped mass block by block, and kick(p, q) then uses
+  // a_new of DOFs p .. q-1. max |u| is measured as u is updated (measured_max_u()), on DOFs still in cache.
+  template <class Drift, class Kick>
+  void streamed_step(const double* forces_v, double t1, double* anew, Drift&& drift, Kick&& kick) {
+    const double* ndinv = model_.mass().negated_inverse().data();
+    const bool uniform = model_.mass().is_uniform();
+    double* u = u_.data();
+    double umax = 0.0;
+    bool finite = true;
+    model_.stream_acceleration(
+        u, forces_v, t1, anew, stats_,
+        [&](Index p, Index q) {
+          drift(p, q);
+          largest(q - p, u + p, umax, finite);
+        },
+        [&](Index p, Index q) {
+          if (uniform)  // (one mass: one inverse, no array to read)
+            scale(q - p, anew + p, ndinv[0]);
+          else
+            Mass::scale(q - p, anew + p, ndinv + p);
+          kick(p, q);
+        });
+    max_u_ = finite ? umax : std::numeric_limits<double>::quiet_NaN();
+  }
+  static void scale(Index n, double* __restrict x, double w) {
+    for (Index i = 0; i < n; ++i) x[i] *= w;
+  }
+  // m = max(m, |u_i|), finite = false if some u_i is not finite (loops the compiler vectorises: a
+  // conjunction of comparisons, as displacement_ok, and Eigen's maximum).
+  static void largest(Index n, const double* __restrict u, double& m, bool& finite) {
+    bool ok = true;
+    for (Index i = 0; i < n; ++i) ok &= std::abs(u[i]) <= std::numeric_limits<double>::max();
+    finite = finite && ok;
+    if (n > 0) m = std::max(m, Eigen::Map<const Vector>(u, n).cwiseAbs().maxCoeff());
+  }
+
   // A failed step: the stepper keeps its state before the step.
   Status fail(const Failure& f) {
     failure_ = f;
@@ -208,6 +250,7 @@ class StepperBase {
   }
 
   ModelT model_;
+  bool stream_ = false;  // the model can be stepped in one pass (Model::can_stream())
   double h_ = 0.0;
   double t0_ = 0.0;     // the time the current step length began at
   std::int64_t n_ = 0;  // steps since the start (or set_state)
