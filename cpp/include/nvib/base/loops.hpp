@@ -24,8 +24,9 @@ template <class F>
 NVIB_FLATTEN inline void looped(Eigen::Index n, F& body) {
   for (Eigen::Index i = 0; i < n; ++i) body(i);
 }
+// Inlined where it is called (each call has a body of its own, so nothing is duplicated).
 template <class F>
-inline void for_each_index(Eigen::Index n, F&& body) {
+NVIB_ALWAYS_INLINE void for_each_index(Eigen::Index n, F&& body) {
   switch (n) {
     case 1: return unrolled<1>(body);
     case 2: return unrolled<2>(body);

@@ -100,11 +100,7 @@ class CompiledEffects {
   // Effects in the dense_first groups (their values are kept per time by EffectSet), and those groups
   // (the first ones).
   std::size_t num_dense_loads() const { return dense_loads_; }
-  std::size_t num_load_groups() const {
-    std::size_t q = 0;
-    while (q < groups_.size() && groups_[q].storage == kernels::dense_first) ++q;
-    return q;
-  }
+  std::size_t num_load_groups() const { return load_groups_; }
   // The largest halo of the groups after the loads (kernels::Group::halo), -1 if one has none.
   std::int64_t stream_halo() const {
     std::int64_t h = 0;
@@ -314,6 +310,7 @@ class CompiledEffects {
         finish_group<Lw>(g, st, state_size);
       });
     }
+    while (load_groups_ < groups_.size() && groups_[load_groups_].storage == kernels::dense_first) ++load_groups_;
     for (std::size_t q = 0; q < groups_.size(); ++q) {
       kernels::Group& g = groups_[q];
       if (group_arrays_[q] != npos)
@@ -379,6 +376,7 @@ class CompiledEffects {
     if constexpr (L::is_load) {
       if (g.storage == dense_first) {
         g.load_values = &dense_load_values<L>;
+        g.load_write = &dense_load_write<L>;
         g.load = dense_loads_;
         dense_loads_ += g.size;
       }
@@ -404,6 +402,7 @@ class CompiledEffects {
   std::vector<std::size_t> group_arrays_;           // per group: its array, or npos
   std::vector<double> initial_state_;
   std::size_t dense_loads_ = 0;
+  std::size_t load_groups_ = 0;  // the dense_first groups, the first ones
 };
 
 }  // namespace effects

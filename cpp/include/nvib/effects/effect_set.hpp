@@ -80,10 +80,22 @@ class EffectSet {
   // The same on contiguous storage of size(): Model calls it with its vectors' data, no Eigen::Ref formed.
   void eval(const double* up, const double* vp, double t, double* op) const {
     const auto& groups = c_->groups();
-    write_loads(t, op, 0, c_->constant_load().size());
+    const std::size_t nl = c_->num_load_groups();
+    if (nl == 1) {  // one group of dense loads (a ground motion): its values, then its rows, all DOFs
+      const kernels::Group& g = groups.front();
+      double* f = load_f_.data();
+      if (!(t == load_t_)) {
+        g.load_write(g, t, f, op);
+        load_t_ = t;
+      } else {
+        kernels::add_dense_loads(g, f, op);
+      }
+    } else {
+      write_loads(t, op, 0, c_->constant_load().size());
+    }
     const double* committed = committed_.data();
     double* trial = trial_.data();
-    for (auto g = groups.begin() + static_cast<std::ptrdiff_t>(c_->num_load_groups()); g != groups.end(); ++g)
+    for (auto g = groups.begin() + static_cast<std::ptrdiff_t>(nl), e = groups.end(); g != e; ++g)
       g->kernel(*g, up, vp, t, op, committed, trial);
   }
 

@@ -56,6 +56,8 @@ struct Group {
   ForceKernel kernel = nullptr;
   // dense_first: the loads' values f_k(t), and where the group's first sits among every dense load's
   void (*load_values)(const Group&, double t, double* f) = nullptr;
+  // The same values into f, and the rows they add (add_dense_loads) over all DOFs, in one call.
+  void (*load_write)(const Group&, double t, double* f, double* out) = nullptr;
   std::size_t load = 0;
   // How far effect k's DOFs lie from DOF k (-1: anywhere; a dense row), so that the force can be
   // evaluated block by block along the DOFs (EffectSet's streamed evaluation); the sizes of one
@@ -226,6 +228,41 @@ inline void add_dense_loads(const Group& g, const double* f, double* __restrict 
 inline void add_dense_loads(const Group& g, const double* f, double* __restrict out) {
   add_dense_loads(g, f, out, 0, g.n);
 }
+// Each value computed, kept and added where it is used (the explicit schemes' one evaluation per
+// time): add_dense_loads' operations in its order.
+template <class L>
+void dense_load_write(const Group& g, double t, double* __restrict f, double* __restrict out) {
+  const Index n = g.n;
+  const double* __restrict rv = g.row_value;
+  std::size_t k = 0;
+  if (g.writes && g.size > 0) {
+    const double f0 = f[0] = L::value(g.params_of<L>(0), 0.0, 0.0, t);
+    const double* __restrict w = g.rows;
+    const double* __restrict base = g.constant_load;
+    if (rv != nullptr && !std::isnan(rv[0])) {
+      const double w0 = rv[0];
+      if (base == nullptr)
+        detail::for_each_index(n, [=](Index q) { out[q] = w0 * f0; });
+      else
+        detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w0 * f0; });
+    } else if (base == nullptr) {
+      detail::for_each_index(n, [=](Index q) { out[q] = w[q] * f0; });
+    } else {
+      detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w[q] * f0; });
+    }
+    k = 1;
+  }
+  for (; k < g.size; ++k) {
+    const double fk = f[k] = L::value(g.params_of<L>(k), 0.0, 0.0, t);
+    if (rv != nullptr && !std::isnan(rv[k])) {
+      const double wk = rv[k];
+      for (Index q = 0; q < n; ++q) out[q] += wk * fk;
+    } else {
+      const double* __restrict w = g.rows + static_cast<Index>(k) * n;
+      for (Index q = 0; q < n; ++q) out[q] += w[q] * fk;
+    }
+  }
+}
 using LoadValues = void (*)(const Group&, double t, double* f);
 
 template <class L, Storage S, bool Uniform>
@@ -362,9 +399,10 @@ void add_chain_forces(const Group& g, const double* u, const double* v, double t
 }
 
 // Whether a group of differences of two DOFs (the first may be to the ground) is a chain along
-// consecutive DOFs (add_chain_forces).
+// consecutive DOFs long enough for add_chain_forces to pay (on a few storeys the chain of stores it
+// avoids is short, and its two loops cost more: 197 against 154 instructions on six storeys).
 inline bool is_chain(const Group& g) {
-  if (!(g.storage == pair || g.storage == mixed) || g.size < 2) return false;
+  if (!(g.storage == pair || g.storage == mixed) || g.size < 32) return false;
   for (std::size_t k = 0; k < g.size; ++k) {
     if (g.i[k] != g.i[0] + static_cast<std::int64_t>(k)) return false;
     const bool first_grounded = k == 0 && g.j[k] < 0;

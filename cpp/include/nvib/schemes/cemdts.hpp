@@ -76,23 +76,7 @@ class CEMDTSStepper : public TwoLevelStepper<ModelT> {
     const double cu = (0.5 + eta) * h2, cp = eta * h2;                                // u
     const double vn = (0.5 - eta) * h_, va = (0.5 + 2.0 * eta) * h_, vp = eta * h_;  // v
     const Index n = u_.size();
-    if (stream_) {  // the same updates, block by block along the DOFs around the force (streamed_step)
-      double *u = u_.data(), *v = v_.data(), *a = a_.data(), *ap = aprev_.data(), *an = anew_.data(), *vs = vstar_.data();
-      const bool velocity = model_.uses_velocity();
-      const double ca = (1.0 + eta) * h_;
-      this->streamed_step(
-          velocity ? vs : v, t1, an,
-          [=](Index p, Index q) {
-            if (velocity)
-              drift_predict(q - p, u + p, vs + p, v + p, a + p, ap + p, h, cu, cp, ca, vp);
-            else
-              drift(q - p, u + p, v + p, a + p, ap + p, h, cu, cp);
-          },
-          [=](Index p, Index q) { kick(q - p, v + p, an + p, a + p, ap + p, vn, va, vp); });
-      aprev_.swap(a_);
-      a_.swap(anew_);
-      return this->advance();
-    }
+    if (stream_) return step_streamed(t1, h, cu, cp, vn, va, vp);
     if (model_.uses_velocity()) {
       drift_predict(n, u_.data(), vstar_.data(), v_.data(), a_.data(), aprev_.data(), h, cu, cp, (1.0 + eta) * h_, vp);
       model_.acceleration(u_, vstar_, t1, anew_, stats_);
@@ -108,14 +92,34 @@ class CEMDTSStepper : public TwoLevelStepper<ModelT> {
 
   const CEMDTS& scheme() const { return scheme_; }
 
+  // The same updates, block by block along the DOFs around the force (streamed_step); out of line, as
+  // CentralDifference's.
+  NVIB_NOINLINE Status step_streamed(double t1, double h, double cu, double cp, double vn, double va, double vp) {
+    double *u = u_.data(), *v = v_.data(), *a = a_.data(), *ap = aprev_.data(), *an = anew_.data(), *vs = vstar_.data();
+    const bool velocity = model_.uses_velocity();
+    const double ca = (1.0 + scheme_.eta) * h_;
+    this->streamed_step(
+        velocity ? vs : v, t1, an,
+        [=](Index p, Index q) {
+          if (velocity)
+            drift_predict(q - p, u + p, vs + p, v + p, a + p, ap + p, h, cu, cp, ca, vp);
+          else
+            drift(q - p, u + p, v + p, a + p, ap + p, h, cu, cp);
+        },
+        [=](Index p, Index q) { kick(q - p, v + p, an + p, a + p, ap + p, vn, va, vp); });
+    aprev_.swap(a_);
+    a_.swap(anew_);
+    return this->advance();
+  }
+
   // The step's loops on non-overlapping arrays, unrolled up to 8 DOFs (see CentralDifference): the
   // same operations in the same order as u += h v + cu a - cp a_prev, v* = v + ca a - vp a_prev and
   // v += vn a_new + va a - vp a_prev.
-  static void drift(Index n, double* __restrict u, const double* __restrict v, const double* __restrict a,
+  NVIB_ALWAYS_INLINE static void drift(Index n, double* __restrict u, const double* __restrict v, const double* __restrict a,
                     const double* __restrict ap, double h, double cu, double cp) {
     detail::for_each_index(n, [=](Index i) { u[i] += h * v[i] + cu * a[i] - cp * ap[i]; });
   }
-  static void drift_predict(Index n, double* __restrict u, double* __restrict vs, const double* __restrict v,
+  NVIB_ALWAYS_INLINE static void drift_predict(Index n, double* __restrict u, double* __restrict vs, const double* __restrict v,
                             const double* __restrict a, const double* __restrict ap, double h, double cu, double cp,
                             double ca, double vp) {
     detail::for_each_index(n, [=](Index i) {
@@ -123,7 +127,7 @@ class CEMDTSStepper : public TwoLevelStepper<ModelT> {
       vs[i] = v[i] + ca * a[i] - vp * ap[i];
     });
   }
-  static void kick(Index n, double* __restrict v, const double* __restrict an, const double* __restrict a,
+  NVIB_ALWAYS_INLINE static void kick(Index n, double* __restrict v, const double* __restrict an, const double* __restrict a,
                    const double* __restrict ap, double vn, double va, double vp) {
     detail::for_each_index(n, [=](Index i) { v[i] += vn * an[i] + va * a[i] - vp * ap[i]; });
   }

@@ -60,15 +60,7 @@ class ZhaiStepper : public TwoLevelStepper<ModelT> {
     const double t1 = this->next_time();
     const double psi = scheme_.psi, phi = scheme_.phi, h2 = h_ * h_, h = h_;
     const double cu = (0.5 + psi) * h2, cp = psi * h2, va = (1.0 + phi) * h_, vp = phi * h_;
-    if (stream_) {  // the same updates, block by block along the DOFs around the force (streamed_step)
-      // a_{n+1} goes where a_{n-1} was: each DOF's a_{n-1} is read (by its update) before its a_{n+1} is written
-      double *u = u_.data(), *v = v_.data(), *a = a_.data(), *ap = aprev_.data();
-      this->streamed_step(
-          v, t1, ap, [=](Index p, Index q) { advance_state(q - p, u + p, v + p, a + p, ap + p, h, cu, cp, va, vp); },
-          [](Index, Index) {});
-      aprev_.swap(a_);
-      return this->advance();
-    }
+    if (stream_) return step_streamed(t1, h, cu, cp, va, vp);
     advance_state(u_.size(), u_.data(), v_.data(), a_.data(), aprev_.data(), h, cu, cp, va, vp);
     aprev_.swap(a_);
     model_.acceleration(u_, v_, t1, a_, stats_);
@@ -76,6 +68,18 @@ class ZhaiStepper : public TwoLevelStepper<ModelT> {
   }
 
   const Zhai& scheme() const { return scheme_; }
+
+  // The same updates, block by block along the DOFs around the force (streamed_step), out of line as
+  // CentralDifference's; a_{n+1} goes where a_{n-1} was: each DOF's a_{n-1} is read (by its update)
+  // before its a_{n+1} is written.
+  NVIB_NOINLINE Status step_streamed(double t1, double h, double cu, double cp, double va, double vp) {
+    double *u = u_.data(), *v = v_.data(), *a = a_.data(), *ap = aprev_.data();
+    this->streamed_step(
+        v, t1, ap, [=](Index p, Index q) { advance_state(q - p, u + p, v + p, a + p, ap + p, h, cu, cp, va, vp); },
+        [](Index, Index) {});
+    aprev_.swap(a_);
+    return this->advance();
+  }
 
   // u += h v + cu a - cp a_prev, then v += va a - vp a_prev, entry by entry (u reads v_n), on
   // non-overlapping arrays, unrolled up to 8 DOFs (see CentralDifference).
