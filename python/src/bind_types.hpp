@@ -169,7 +169,7 @@ inline void bind_types(py::module_& m) {
   });
   stats.def_readonly("wall_time", &Stats::wall_time, "seconds")
       .def_property_readonly("linear_solver", [](const Stats& s) { return std::string(s.linear_solver); },
-                             "the implicit schemes' linear solver: 'dense LU', 'banded LDLT', 'sparse LDLT' (simplicial), 'supernodal LDLT' or 'sparse LU' ('' if none)")
+                             "the implicit schemes' linear solver: 'dense LU', 'banded LDLT', 'sparse LDLT' (simplicial), 'supernodal LDLT' or 'sparse LU', each also '... + low-rank update' (the linear part factorised once, the effects' tangent as a low-rank update) ('' if none)")
       .def("as_dict", &stats_dict)
       .def(py::pickle(
           [](const Stats& s) {  // the counters in order, then wall_time and linear_solver

@@ -79,7 +79,7 @@ void all_schemes(const std::string& label, const ModelT& model) {
 }
 
 // Laws with memory on a sparse tangent: every scheme and variant, the implicit ones with the sparse
-// and the banded linear solvers forced (and checked to be the one used). Each step evaluates trials (the return
+// the banded and the low-rank linear solvers forced (and checked to be the one used). Each step evaluates trials (the return
 // mappings, Bouc-Wen's adaptive Runge-Kutta flow, the IMK branches) and commits one per accepted step
 // (a swap of the trial and committed buffers, or a new trial at the end of a generalized-alpha step).
 template <class ModelT>
@@ -90,7 +90,7 @@ void hysteretic_schemes(const std::string& label, const ModelT& model, const nvi
   });
   check_no_alloc((label + " CentralDifference(half_step)").c_str(),
                  nvib::CentralDifference(nvib::CentralDifference::Velocity::half_step), model, &u0);
-  for (auto choice : {nvib::LinearSolverChoice::sparse, nvib::LinearSolverChoice::banded})
+  for (auto choice : {nvib::LinearSolverChoice::sparse, nvib::LinearSolverChoice::banded, nvib::LinearSolverChoice::low_rank})
     for (auto m : {nvib::NewtonMode::newton, nvib::NewtonMode::modified, nvib::NewtonMode::initial,
                    nvib::NewtonMode::incremental, nvib::NewtonMode::one_iteration}) {
       nvib::Newton nw = mode(m);
@@ -101,7 +101,9 @@ void hysteretic_schemes(const std::string& label, const ModelT& model, const nvi
       auto st = nvib::make_stepper(nm, model, 1e-3);
       st.initialize(0.0, u0, nvib::Vector::Zero(model.size()));
       st.step();
-      CHECK(std::string(st.stats().linear_solver).find(solver) == 0);
+      const std::string used = st.stats().linear_solver;
+      CHECK(choice == nvib::LinearSolverChoice::low_rank ? used.find("low-rank update") != std::string::npos
+                                                          : used.find(solver) == 0);
     }
   nvib::Newton nw;
   nw.linear_solver = nvib::LinearSolverChoice::sparse;

@@ -205,6 +205,73 @@ int main() {
                             .stats.linear_solver) == (size <= 64 ? "dense LU" : "sparse LDLT"));
     }
   }
+  // A large linear model with a few nonlinear effects (a 20 x 20 grid of linear springs and dampers,
+  // hardening springs and a power-law damper at four DOFs): the linear part factorised once and the
+  // effects' tangent as a low-rank update, chosen automatically; the trajectories of the sparse
+  // factorisation of S every iteration, to round-off, with as many Newton iterations, in every mode.
+  // A static problem whose linear part holds no DOF on its own falls back to factorising S.
+  {
+    const Index side = 20, N = side * side;
+    std::vector<fx::Effect> list;
+    for (Index r = 0; r < side; ++r)
+      for (Index c = 0; c < side; ++c) {
+        const Index i = r * side + c;
+        if (c + 1 < side) list.push_back(fx::spring({{i, 1.0}, {i + 1, -1.0}}, 2e3 + double(i)));
+        if (r + 1 < side) list.push_back(fx::spring({{i, 1.0}, {i + side, -1.0}}, 1.5e3));
+        if (r == 0) list.push_back(fx::spring({{i, 1.0}}, 4e3));
+        list.push_back(fx::damper({{i, 1.0}}, 0.5));
+      }
+    list.push_back(fx::hardening_spring({{N - 1, 1.0}}, 1e3, 400.0));
+    list.push_back(fx::hardening_spring({{N - side, 1.0}, {N - side - 1, -1.0}}, 2e3, 300.0));
+    list.push_back(fx::hardening_spring({{side * 10 + 3, 1.0}}, 5e2, 800.0));
+    list.push_back(fx::power_damper({{N - 1, 1.0}, {N / 2, -1.0}}, 3.0, 1.5));
+    fx::Measure r;
+    for (Index i = 0; i < N; ++i) r.emplace_back(i, 1.0);
+    list.push_back(fx::ground_acceleration(r, fx::Signal::sine(30.0, 25.0)));
+    const auto grid = fx::make_effect_model(nvib::Mass::diagonal(Vector::LinSpaced(N, 1.0, 1.5)), std::move(list));
+    const Vector u0 = Vector::Zero(N), v0 = Vector::Zero(N);
+    for (Mode mode : {Mode::newton, Mode::modified, Mode::incremental, Mode::one_iteration}) {
+      const auto a = nvib::solve(grid, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::sparse)), 2e-3, 0.4, u0, v0);
+      const auto b = nvib::solve(grid, nvib::Newmark(0.25, 0.5, with_solver(mode, LS::automatic)), 2e-3, 0.4, u0, v0);
+      const auto c = nvib::solve(grid, nvib::GeneralizedAlpha::from_rho_inf(0.7, with_solver(mode, LS::low_rank)),
+                                 2e-3, 0.4, u0, v0);
+      const auto d = nvib::solve(grid, nvib::GeneralizedAlpha::from_rho_inf(0.7, with_solver(mode, LS::sparse)),
+                                 2e-3, 0.4, u0, v0);
+      CHECK(a.status == nvib::Status::success && b.status == nvib::Status::success);
+      CHECK(c.status == nvib::Status::success && d.status == nvib::Status::success);
+      const std::string base = a.stats.linear_solver;  // (supernodal or simplicial by its fill)
+      CHECK(base == "sparse LDLT" || base == "supernodal LDLT");
+      CHECK(std::string(b.stats.linear_solver) == base + " + low-rank update");
+      CHECK(std::string(c.stats.linear_solver) == base + " + low-rank update");
+      if (mode == Mode::newton) std::printf("grid: %s\n", b.stats.linear_solver);
+      const double du = rel_diff(b.u, a.u), dv = rel_diff(b.v, a.v), du2 = rel_diff(c.u, d.u);
+      std::printf("grid %lld DOFs + 4 nonlinear effects, %-13s low-rank vs sparse: u %.1e v %.1e (GaM u %.1e), "
+                  "Newton it. %lld / %lld, max |u| %.3g\n",
+                  static_cast<long long>(N), nvib::to_string(mode), du, dv, du2,
+                  static_cast<long long>(b.stats.num_newton_iters), static_cast<long long>(a.stats.num_newton_iters),
+                  b.u.cwiseAbs().maxCoeff());
+      CHECK(du <= 1e-11 && dv <= 1e-11 && du2 <= 1e-11);
+      CHECK(b.stats.num_newton_iters == a.stats.num_newton_iters);
+      CHECK(c.stats.num_newton_iters == d.stats.num_newton_iters);
+    }
+    // The springs matter (hardening: the answer is not the linear one).
+    {
+      const auto b = nvib::solve(grid, nvib::Newmark(), 2e-3, 0.4, u0, v0);
+      CHECK(b.stats.num_newton_iters > b.stats.num_steps);
+    }
+    // Static: no linear stiffness holds DOF 0 of this model (its only spring is nonlinear), so the linear
+    // part is singular and S itself is factorised; the answer is that of the sparse solver.
+    {
+      std::vector<fx::Effect> two;
+      for (Index i = 0; i + 1 < 200; ++i) two.push_back(fx::spring({{i, 1.0}, {i + 1, -1.0}}, 1e3));
+      two.push_back(fx::hardening_spring({{0, 1.0}}, 1e3, 10.0));
+      two.push_back(fx::constant_force({{199, 1.0}}, 50.0));
+      two.push_back(fx::hardening_spring({{0, 1.0}, {150, -1.0}}, 1e2, 10.0));  // off the band: sparse, not banded
+      auto stat = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(200)), std::move(two));
+      const Vector x = nvib::static_equilibrium(stat, 0.0, Vector::Zero(200));
+      CHECK(x.allFinite() && std::abs(x[0]) > 0.0);
+    }
+  }
   // A nonsymmetric linear stiffness (a follower-type coupling): sparse LU.
   {
     SparseMatrix K(n, n);

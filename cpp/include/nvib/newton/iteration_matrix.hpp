@@ -157,6 +157,31 @@ class SparseIterationMatrix {
     return finite == 0.0;
   }
 
+  // The tangent alone (the low-rank update's A is made from it: low_rank.hpp): its entries' values, and
+  // C_t for multiply_C(); false if the tangent is not finite. S's values are not touched.
+  template <class ModelT>
+  bool assemble_tangent(ModelT& model, const IterationMatrix& im, Stats& st) {
+    if (!ready_) setup(model);
+    model.tangent_values(*im.u, *im.v, im.t, kvals_.data(), cvals_.data(), st);
+    double finite = 0.0;
+    for (double x : kvals_) finite += x - x;
+    if (velocity_) {
+      for (double x : cvals_) finite += x - x;
+      double* c = Ct_.valuePtr();
+      std::fill_n(c, Ct_.nonZeros(), 0.0);
+      scatter(posCtN_, cvals_.data(), c);
+      add_values(model.C(), posCtC_, c);
+    }
+    K_ = &model.K();
+    return finite == 0.0;
+  }
+  // The nonlinear tangent's entries (C's empty where the model does not use velocity), and their values
+  // at the last assembly.
+  const std::vector<Entry>& k_entries() const { return kent_; }
+  const std::vector<Entry>& c_entries() const { return cent_; }
+  const double* k_values() const { return kvals_.data(); }
+  const double* c_values() const { return cvals_.data(); }
+
   // Where assemble() writes S: matrix()'s values (compressed columns), or the layout of a
   // factorisation that reads S in its own storage (retarget()).
   double* values() { return retargeted_ ? target_.data() : S_.valuePtr(); }

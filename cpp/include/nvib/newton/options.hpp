@@ -11,15 +11,17 @@
 namespace nvib {
 
 // Which linear solver the Newton component uses: automatic (banded LDL^T for a symmetric iteration
-// matrix that fits its band, a dense LU for small or nearly full ones, sparse otherwise:
+// matrix that fits its band, a dense LU for small or nearly full ones, sparse otherwise, and on a
+// large linear part with a few nonlinear DOFs the linear part's factors with a low-rank update:
 // IterationSystem), or forced.
-enum class LinearSolverChoice { automatic, dense, sparse, banded };
+enum class LinearSolverChoice { automatic, dense, sparse, banded, low_rank };
 inline const char* to_string(LinearSolverChoice c) {
   switch (c) {
     case LinearSolverChoice::automatic: return "auto";
     case LinearSolverChoice::dense: return "dense";
     case LinearSolverChoice::sparse: return "sparse";
     case LinearSolverChoice::banded: return "banded";
+    case LinearSolverChoice::low_rank: return "low_rank";
   }
   return "?";
 }
@@ -61,7 +63,8 @@ struct Newton {
       "Options of the Newton iteration of the implicit schemes: iteration ('newton', 'modified', 'initial', "
       "'incremental' or 'one_iteration'), max_iter, rtol (relative to the force scale of the step), atol "
       "(force units), jacobian ('analytic' or 'finite_difference') and linear_solver ('auto', 'dense', "
-      "'sparse' or 'banded'; Stats.linear_solver says which was used).";
+      "'sparse', 'banded' or 'low_rank': the linear part factorised once and the effects' tangent applied as "
+      "a low-rank update; Stats.linear_solver says which was used).";
   NewtonMode iteration = NewtonMode::newton;  // the equilibrium iteration (its mode)
   int max_iter = 20;
   double rtol = 1e-10;  // relative to the force scale of the step
@@ -78,8 +81,10 @@ struct Newton {
     v(s.rtol, param::real("rtol", "residual tolerance relative to the force scale of the step").at_least(0.0));
     v(s.atol, param::real("atol", "absolute residual tolerance, in force units").at_least(0.0));
     v(s.jacobian, param::choice("jacobian", "how the tangent is obtained", {"analytic", "finite_difference"}));
-    v(s.linear_solver, param::choice("linear_solver", "dense LU, sparse LDLT/LU, banded LDLT, or chosen by pattern and size",
-                                     {"auto", "dense", "sparse", "banded"}));
+    v(s.linear_solver,
+      param::choice("linear_solver",
+                    "dense LU, sparse LDLT/LU, banded LDLT, low-rank update of the linear part, or chosen by pattern and size",
+                    {"auto", "dense", "sparse", "banded", "low_rank"}));
   }
   void validate() const {
     param::check_ranges(*this);

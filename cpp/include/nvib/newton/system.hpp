@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "../base/types.hpp"
@@ -19,13 +20,15 @@
 #include "../linalg/sparse_factorization.hpp"
 #include "../model/mass.hpp"
 #include "iteration_matrix.hpp"
+#include "low_rank.hpp"
 #include "options.hpp"
 
 namespace nvib {
 
 // Every name Stats::linear_solver takes (a pickled or saved name is read back through this list).
-inline constexpr const char* kLinearSolverNames[] = {"dense LU", "banded LDLT", "sparse LDLT", "supernodal LDLT",
-                                                     "sparse LU"};
+inline constexpr const char* kLinearSolverNames[] = {
+    "dense LU",  "banded LDLT", "sparse LDLT", "supernodal LDLT", "sparse LU", "sparse LDLT + low-rank update",
+    "supernodal LDLT + low-rank update", "sparse LU + low-rank update"};
 
 class IterationSystem {
  public:
@@ -33,8 +36,10 @@ class IterationSystem {
   // twice the entries of its lower triangle is factorised in the band (a chain, a shear building, a
   // beam: no fill outside it, and no index lists); otherwise up to kDenseBelow DOFs the dense LU (faster
   // there than a sparse factorisation), up to kDenseFullMax also when S is more than a quarter full,
-  // else sparse LDL^T or LU.
-  static constexpr Index kDenseBelow = 64, kDenseFullMax = 500;
+  // else sparse LDL^T or LU; and where that sparse S is a large linear part with a few nonlinear DOFs
+  // (at most LowRankUpdate::kAutoMaxRank, and at most one DOF in kLowRankMinRatio), the linear part
+  // factorised once and the effects' tangent applied as a low-rank update (low_rank.hpp).
+  static constexpr Index kDenseBelow = 64, kDenseFullMax = 500, kLowRankMinRatio = 16;
   static constexpr const char* kDenseName = "dense LU";
   static constexpr const char* kBandedName = "banded LDLT";
 
@@ -43,6 +48,7 @@ class IterationSystem {
     if (!chosen_) return "";
     if (kind_ == Kind::dense) return kDenseName;
     if (kind_ == Kind::banded && !band_failed_) return kBandedName;
+    if (kind_ == Kind::low_rank) return low_rank_name(low_rank_.base_name());
     return sparse_lu_.name();
   }
   bool is_dense() const { return kind_ == Kind::dense; }
@@ -69,6 +75,10 @@ class IterationSystem {
       last_ = S_;
       have_last_ = true;
       return last_ok_;
+    }
+    if (kind_ == Kind::low_rank) {
+      if (low_rank_.base(model, im)) return factorize_low_rank(model, im, st);
+      setup_sparse(model);  // S0 is singular (a static problem, say): S itself is factorised from now on
     }
     if (!sparse_S_.assemble(model, im, st)) return have_last_ = false;
     const double* values = sparse_S_.values();
@@ -100,6 +110,8 @@ class IterationSystem {
   void solve_in_place(Vector& x) const {
     if (kind_ == Kind::dense)
       lu_.solve_in_place(x);
+    else if (kind_ == Kind::low_rank)
+      low_rank_.solve_in_place(x);
     else if (kind_ == Kind::banded && !band_failed_)
       banded_.solve_in_place(x.data());
     else
@@ -117,6 +129,23 @@ class IterationSystem {
   }
 
  private:
+  static const char* low_rank_name(const char* base) {
+    for (const char* name : kLinearSolverNames)
+      if (std::strncmp(name, base, std::strlen(base)) == 0 && std::strstr(name, "low-rank") != nullptr) return name;
+    return "low-rank update";
+  }
+  // The effects' tangent alone (S's linear part keeps its factors): reused when A is the last one.
+  template <class ModelT>
+  bool factorize_low_rank(ModelT& model, const IterationMatrix& im, Stats& st) {
+    const bool finite = sparse_S_.assemble_tangent(model, im, st);
+    st.linear_solver = name();
+    if (!finite) return have_last_ = false;
+    low_rank_.fill(sparse_S_.k_values(), sparse_S_.c_values(), im);
+    if (have_last_ && low_rank_.same_as_last()) return reused_ = true, last_ok_;
+    last_ok_ = low_rank_.factorize_filled();
+    have_last_ = true;
+    return last_ok_;
+  }
   template <class ModelT>
   void choose(const ModelT& model, bool finite_difference, LinearSolverChoice choice) {
     const Index n = model.size();
@@ -158,12 +187,14 @@ class IterationSystem {
       NVIB_CHECK(choice != LinearSolverChoice::banded || sparse_S_.symmetric(), "linear_solver",
                  "'banded' factorises a symmetric iteration matrix (LDL^T); this model's K or C is not symmetric: "
                  "use 'sparse' (LU) or 'auto'");
-      if (choice == LinearSolverChoice::banded || band_fits) {
+      if (choice == LinearSolverChoice::banded || (band_fits && choice != LinearSolverChoice::low_rank)) {
         kind_ = Kind::banded;
         banded_.analyze(S);
         sparse_S_.retarget(banded_.layout(S), banded_.size());
-      } else if (n <= kDenseBelow) {
+      } else if (n <= kDenseBelow && choice != LinearSolverChoice::low_rank) {
         kind_ = Kind::dense;
+      } else if (choose_low_rank(model, choice)) {
+        kind_ = Kind::low_rank;
       } else {
         sparse_lu_.analyze(S, sparse_S_.symmetric());
         lu_ready_ = true;
@@ -175,6 +206,24 @@ class IterationSystem {
       dense_S_.resize(n);
       lu_.resize(n);
     }
+  }
+  // The low-rank update where it was asked for, or (automatic) where the nonlinear tangent touches at
+  // most kAutoMaxRank DOFs and at most one in kLowRankMinRatio.
+  template <class ModelT>
+  bool choose_low_rank(const ModelT& model, LinearSolverChoice choice) {
+    const Index n = model.size();
+    const Index p = static_cast<Index>(LowRankUpdate::touched_dofs(sparse_S_.k_entries(), sparse_S_.c_entries()).size());
+    if (choice == LinearSolverChoice::low_rank) {  // (p = 0, no nonlinear tangent: S is the linear part)
+      const double mb = 8.0 * static_cast<double>(n) * static_cast<double>(p) / 1e6;
+      NVIB_CHECK(mb <= 4096.0, "linear_solver",
+                 "'low_rank' keeps an n x p matrix for the " + std::to_string(p) + " DOFs the effects' tangent touches (" +
+                     detail::fmt(mb) + " MB); use 'sparse' or 'auto'");
+    } else if (!(choice == LinearSolverChoice::automatic && p > 0 && p <= LowRankUpdate::kAutoMaxRank &&
+                 kLowRankMinRatio * p <= n)) {
+      return false;
+    }
+    low_rank_.setup(model, sparse_S_.k_entries(), sparse_S_.c_entries(), model.uses_velocity(), sparse_S_.symmetric());
+    return true;
   }
   template <class ModelT>
   void setup_sparse(const ModelT& model) {
@@ -196,7 +245,7 @@ class IterationSystem {
     return true;
   }
 
-  enum class Kind { dense, banded, sparse };
+  enum class Kind { dense, banded, sparse, low_rank };
   Kind kind_ = Kind::dense;
   bool chosen_ = false;
   bool have_last_ = false, last_ok_ = false, reused_ = false;
@@ -208,6 +257,7 @@ class IterationSystem {
   SparseIterationMatrix sparse_S_;
   BandedLDLT banded_;
   SparseFactorization sparse_lu_;
+  LowRankUpdate low_rank_;
 };
 
 }  // namespace nvib
