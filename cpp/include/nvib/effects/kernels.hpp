@@ -190,19 +190,22 @@ template <class L>
 void dense_load_values(const Group& g, double t, double* f) {
   for (std::size_t k = 0; k < g.size; ++k) f[k] = L::value(g.params_of<L>(k), 0.0, 0.0, t);
 }
-inline void add_dense_loads(const Group& g, const double* f, double* __restrict out, Index q0, Index q1) {
+// out[q0 .. q1) gets the rows times value(k), k = 0 .. size - 1 in order (value(0) first).
+template <class Value>
+NVIB_ALWAYS_INLINE void add_rows(const Group& g, Value&& value, double* __restrict out, Index q0, Index q1) {
   std::size_t k = 0;
   const Index n = g.n, m = q1 - q0;
   out += q0;
   // Row k's entry q: w[q], or its one value where it has one (then the row is not read: as exact, one
   // stream less).
-  auto one_value = [&](std::size_t r) { return g.row_value != nullptr && !std::isnan(g.row_value[r]); };
+  const double* __restrict rv = g.row_value;
+  auto one_value = [rv](std::size_t r) { return rv != nullptr && !std::isnan(rv[r]); };
   if (g.writes && g.size > 0) {
-    const double f0 = f[0];
+    const double f0 = value(std::size_t(0));
     const double* __restrict w = g.rows + q0;
     const double* __restrict base = g.constant_load ? g.constant_load + q0 : nullptr;
     if (one_value(0)) {
-      const double w0 = g.row_value[0];
+      const double w0 = rv[0];
       if (base == nullptr)  // one stream less: no constant vector to read
         detail::for_each_index(m, [=](Index q) { out[q] = w0 * f0; });
       else
@@ -215,15 +218,18 @@ inline void add_dense_loads(const Group& g, const double* f, double* __restrict 
     k = 1;
   }
   for (; k < g.size; ++k) {
-    const double fk = f[k];
+    const double fk = value(k);
     if (one_value(k)) {
-      const double wk = g.row_value[k];
+      const double wk = rv[k];
       for (Index q = 0; q < m; ++q) out[q] += wk * fk;
     } else {
       const double* __restrict w = g.rows + static_cast<Index>(k) * n + q0;
       for (Index q = 0; q < m; ++q) out[q] += w[q] * fk;
     }
   }
+}
+inline void add_dense_loads(const Group& g, const double* f, double* __restrict out, Index q0, Index q1) {
+  add_rows(g, [f](std::size_t k) { return f[k]; }, out, q0, q1);
 }
 inline void add_dense_loads(const Group& g, const double* f, double* __restrict out) {
   add_dense_loads(g, f, out, 0, g.n);
@@ -232,36 +238,7 @@ inline void add_dense_loads(const Group& g, const double* f, double* __restrict 
 // time): add_dense_loads' operations in its order.
 template <class L>
 void dense_load_write(const Group& g, double t, double* __restrict f, double* __restrict out) {
-  const Index n = g.n;
-  const double* __restrict rv = g.row_value;
-  std::size_t k = 0;
-  if (g.writes && g.size > 0) {
-    const double f0 = f[0] = L::value(g.params_of<L>(0), 0.0, 0.0, t);
-    const double* __restrict w = g.rows;
-    const double* __restrict base = g.constant_load;
-    if (rv != nullptr && !std::isnan(rv[0])) {
-      const double w0 = rv[0];
-      if (base == nullptr)
-        detail::for_each_index(n, [=](Index q) { out[q] = w0 * f0; });
-      else
-        detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w0 * f0; });
-    } else if (base == nullptr) {
-      detail::for_each_index(n, [=](Index q) { out[q] = w[q] * f0; });
-    } else {
-      detail::for_each_index(n, [=](Index q) { out[q] = base[q] + w[q] * f0; });
-    }
-    k = 1;
-  }
-  for (; k < g.size; ++k) {
-    const double fk = f[k] = L::value(g.params_of<L>(k), 0.0, 0.0, t);
-    if (rv != nullptr && !std::isnan(rv[k])) {
-      const double wk = rv[k];
-      for (Index q = 0; q < n; ++q) out[q] += wk * fk;
-    } else {
-      const double* __restrict w = g.rows + static_cast<Index>(k) * n;
-      for (Index q = 0; q < n; ++q) out[q] += w[q] * fk;
-    }
-  }
+  add_rows(g, [&](std::size_t k) { return f[k] = L::value(g.params_of<L>(k), 0.0, 0.0, t); }, out, 0, g.n);
 }
 using LoadValues = void (*)(const Group&, double t, double* f);
 
