@@ -84,9 +84,12 @@ void print_last_row(const char* name, const nvib::History& x) {
   print_json_vector(name, x.data() + (x.rows() - 1) * x.cols(), static_cast<int>(x.cols()));
 }
 
+std::string only_label;  // empty: every run
+
 template <class Scheme, class ModelT>
 void bench(const char* label, const Scheme& scheme, const ModelT& model, double h, double t_end, int repeats,
            std::int64_t k) {
+  if (!only_label.empty() && only_label != label) return;
   const nvib::Vector zero = nvib::Vector::Zero(model.size());
   nvib::SolveOptions opt;
   opt.save_every = k;
@@ -121,6 +124,8 @@ void bench(const char* label, const Scheme& scheme, const ModelT& model, double 
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --only=LABEL (last): that run alone (benchmarks/profile_building.py profiles one scheme)
+  if (argc > 1 && std::string(argv[argc - 1]).rfind("--only=", 0) == 0) only_label = std::string(argv[--argc] + 7);
   const bool implicit = argc > 1 && std::string(argv[argc - 1]) == "--implicit";
   if (implicit) --argc;
   BenchArgs a;
