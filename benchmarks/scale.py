@@ -96,7 +96,9 @@ def run_case(model_kind: str, size: int, key: str) -> dict:
         steps, rounds = 4, 1
     else:
         longer_t, _ = best_of(6, 1)
-        per = max((longer_t - short_t) / 4, 1e-9)
+        # (an implicit run's first steps iterate more than its later ones: the difference of two short
+        # runs may be small or noisy, so it is not taken below a tenth of the short run's mean step)
+        per = max((longer_t - short_t) / 4, 0.05 * short_t, 1e-9)
         steps = int(min(100_000, max(8, TARGET_WORK / per)))
         rounds = 1 if steps <= 8 else 3  # the best of three runs (one where a run is a few slow steps)
         short_t, _ = best_of(2, rounds)
