@@ -14,6 +14,14 @@
 
 namespace nvib {
 
+// Whether a[0 .. n) and b[0 .. n) are the same numbers, bit for bit (signed zeros apart): an iteration
+// matrix identical to the one factorised last keeps its factors.
+inline bool same_values(const double* a, const double* b, Index n) {
+  for (Index k = 0; k < n; ++k)
+    if (!(a[k] == b[k]) || std::signbit(a[k]) != std::signbit(b[k])) return false;
+  return true;
+}
+
 // S = cM M + cC C_t + cK K_t with the tangents taken at (u, v, t).
 struct IterationMatrix {
   double cM = 0.0, cC = 0.0, cK = 1.0;

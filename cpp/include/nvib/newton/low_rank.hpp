@@ -114,11 +114,7 @@ class LowRankUpdate {
 
   // Whether A is, bit for bit, the A factorised last (its factors can be kept).
   bool same_as_last() const {
-    if (!have_A_) return false;
-    const double *a = A_.data(), *b = last_A_.data();
-    for (Index k = 0; k < A_.size(); ++k)
-      if (!(a[k] == b[k]) || std::signbit(a[k]) != std::signbit(b[k])) return false;
-    return true;
+    return have_A_ && same_values(A_.data(), last_A_.data(), A_.size());
   }
   // A from the tangent's values (in the order of setup()'s entries), the last one kept to compare
   // (same_as_last) before factorize_filled(). Allocates nothing.

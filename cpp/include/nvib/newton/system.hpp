@@ -69,7 +69,7 @@ class IterationSystem {
       }
       st.linear_solver = kDenseName;
       dense_S_.assemble(model, im, st, finite_difference, S_);
-      if (have_last_ && same(S_.data(), last_.data(), S_.size())) return reused_ = true, last_ok_;
+      if (have_last_ && same_values(S_.data(), last_.data(), S_.size())) return reused_ = true, last_ok_;
       lu_.assembly() = S_;
       last_ok_ = lu_.factorize_assembled();
       last_ = S_;
@@ -79,12 +79,13 @@ class IterationSystem {
     if (kind_ == Kind::low_rank) {
       if (low_rank_.base(model, im)) return factorize_low_rank(model, im, st);
       setup_sparse(model);  // S0 is singular (a static problem, say): S itself is factorised from now on
+      have_last_ = false;   // (what was kept is the low-rank update's, not a factorised S)
     }
     if (!sparse_S_.assemble(model, im, st)) return have_last_ = false;
     const double* values = sparse_S_.values();
     const Index count = sparse_S_.num_values();
     st.linear_solver = name();
-    if (have_last_ && same(values, last_.data(), count)) return reused_ = true, last_ok_;
+    if (have_last_ && same_values(values, last_.data(), count)) return reused_ = true, last_ok_;
     if (kind_ == Kind::banded) {
       // A pivot the band cannot take without pivoting: this S goes to the sparse LU (with pivoting).
       band_failed_ = !banded_.factorize(values);
@@ -237,12 +238,6 @@ class IterationSystem {
     for (Index j = 0; j < A.outerSize(); ++j)
       for (SparseMatrix::InnerIterator it(A, j); it; ++it) k += it.row() >= j;
     return k;
-  }
-
-  static bool same(const double* a, const double* b, Index n) {
-    for (Index k = 0; k < n; ++k)
-      if (!(a[k] == b[k]) || std::signbit(a[k]) != std::signbit(b[k])) return false;
-    return true;
   }
 
   enum class Kind { dense, banded, sparse, low_rank };
