@@ -369,6 +369,8 @@ class Case:
     ground_amplitude: float   # A of a_g = A sin(omega_1 t)
     units: str
     build_time: float = 0.0
+    alpha: float = 0.0        # C = alpha M + beta K
+    beta: float = 0.0
 
     @property
     def n(self) -> int:
@@ -445,7 +447,7 @@ def _finish(name, kind, hard, K, M, node, comp, direction, spring_dofs, drift_he
     omega_max = 1.01 * math.sqrt(abs(complex(w_top[0])))  # the margin covers the tolerance
     A = 0.1 * np.max(np.abs(u0)) / np.max(np.abs(static)) * 1.0
     return Case(name, kind, hard, K.tocsc(), M.tocsc(), C, node, comp, r, springs, k0, a, u0, np.zeros(n),
-                omega, omega_max, float(A), units)
+                omega, omega_max, float(A), units, alpha=al, beta=be)
 
 
 def _wall(nx, ny):

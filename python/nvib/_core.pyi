@@ -165,6 +165,7 @@ class Model:
     mass_matrix: Array
     K: Array
     C: Array
+    linear_product: str
     def __init__(self, mass: Array, effects: Sequence[Effect], K: Array, C: Array, dofs: Sequence[str],
                  force: Callable[..., Any] | None = ..., tangent: Callable[..., Any] | None = ...,
                  uses_velocity: bool = ..., uses_time: bool = ..., laws: Sequence[tuple] = ...) -> None: ...

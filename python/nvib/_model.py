@@ -560,6 +560,15 @@ class Model:
         """The linear damping (the C given plus every linear damper), a scipy.sparse matrix."""
         return self._core.C
 
+    @property
+    def linear_product(self) -> str:
+        """How K u + C v is taken every step: ``"band"`` (K and C complete bands of half-width <= 2),
+        ``"rayleigh"`` (a lumped mass m and C = alpha m + beta K to round-off: K (u + beta v) + alpha m v,
+        half the memory traffic), ``"shared"`` (C stored on K's pattern: the indices read once),
+        ``"rows"`` (any pattern; K and C of fewer than 4096 stored entries together keep it, their
+        sums in a fixed order) or ``"none"`` (no K and no C)."""
+        return self._core.linear_product
+
     def evaluate_force(self, u, v, t: float = 0.0) -> np.ndarray:
         """K u + C v + F(u, v, t): everything on the left of M a + ... = 0."""
         return self._core.force(_checks.vector("u", u, self.n), _checks.vector("v", v, self.n), _checks.real("t", t))

@@ -399,6 +399,10 @@ inline void bind_models(py::module_& m) {
                              "the linear stiffness: K given, linear springs (those of arrays included)")
       .def_property_readonly("C", [](const PyModel& p) { return linear_matrix(p, false); },
                              "the linear damping: C given, linear dampers (those of arrays included)")
+      .def_property_readonly("linear_product", [](const PyModel& p) {
+        return p.visit([](auto& md) { return std::string(md.linear_product().form_name()); }); },
+                             "how K u + C v is taken: band, rayleigh (C = alpha m + beta K, lumped m), shared "
+                             "(C on K's pattern), rows or none")
       .def_property_readonly("has_state", [](const PyModel& p) { return p.visit([](auto& md) { return md.has_state(); }); },
                              "some law has memory (internal variables)")
       .def_property_readonly("state_size", [](const PyModel& p) { return p.visit([](auto& md) { return md.state_size(); }); })

@@ -3,11 +3,15 @@
 // sparse consistent mass gives its dense equivalent's, and the automatic
 // choice picks what it says. K u + C v (LinearProduct) takes its band form
 // exactly where K and C are complete bands of half-width <= 2, and gives the
-// compressed rows' sums bit for bit either way.
+// compressed rows' sums bit for bit either way; its rayleigh form (C = alpha m +
+// beta K with a lumped mass) and shared form (C on K's pattern) are taken for
+// the C they are meant for and give those sums to round-off.
 #include <nvib/nvib.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -130,10 +134,96 @@ void linear_product_cases() {
   std::printf("LinearProduct: %d band cases and %d general ones, bit for bit with the rows\n", banded, general);
 }
 
+// A symmetric FE-like pattern: K_ii = 4 + |row|, K_ij = -1 for a few random j within +-12 of i (a
+// mesh's numbering), both triangles.
+SparseMatrix scattered_symmetric(Index n, std::mt19937& gen) {
+  std::uniform_int_distribution<int> offset(1, 12);
+  std::uniform_real_distribution<double> value(0.5, 1.5);
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (Index i = 0; i < n; ++i) {
+    double row = 0.0;
+    for (int e = 0; e < 3; ++e) {
+      const Index j = i + offset(gen);
+      if (j >= n) continue;
+      const double k = -value(gen);
+      t.emplace_back(int(i), int(j), k);
+      t.emplace_back(int(j), int(i), k);
+      row += 2.0 * std::abs(k);
+    }
+    t.emplace_back(int(i), int(i), 4.0 + row);
+  }
+  SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());  // (duplicates summed)
+  A.makeCompressed();
+  return A;
+}
+
+// The rayleigh and shared forms of LinearProduct: which form is chosen for which C, and that each
+// gives the rows' sums to round-off. The bound per row is 8 eps (|out0| + |K| |u| + |C| |v|): a sum
+// of a few dozen terms, each rounded once or twice, in another order.
+void linear_product_reordered_cases() {
+  std::mt19937 gen(31415);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> mass(0.5, 4.0);
+  using Form = nvib::LinearProduct::Form;
+  int cases = 0;
+  double worst = 0.0;
+  for (Index n : {17, 700}) {  // (17: below kReorderFrom, the rows' sums)
+    const SparseMatrix K = scattered_symmetric(n, gen);
+    Vector m(n), u(n), v(n), out0(n);
+    for (Index i = 0; i < n; ++i) m[i] = mass(gen), u[i] = normal(gen), v[i] = normal(gen), out0[i] = normal(gen);
+    SparseMatrix Mlump(n, n);
+    for (Index i = 0; i < n; ++i) Mlump.insert(i, i) = m[i];
+    auto check = [&](const SparseMatrix& C, bool lumped, Form expected, const char* what) {
+      if (K.nonZeros() + C.nonZeros() < nvib::LinearProduct::kReorderFrom) expected = Form::rows;
+      const nvib::LinearProduct p(K, C, lumped ? &m : nullptr);
+      if (p.form() != expected) std::printf("  %s (n = %lld): form %s\n", what, (long long)n, p.form_name());
+      CHECK(p.form() == expected);
+      Vector out = out0;
+      p.add(u.data(), v.data(), out.data());
+      const Vector ref = rows_reference(K, C, u, v, out0);
+      if (expected == Form::rows) CHECK(bitwise_equal(out, ref));
+      const Vector mag = out0.cwiseAbs() + SparseMatrix(K.cwiseAbs()) * u.cwiseAbs() + SparseMatrix(C.cwiseAbs()) * v.cwiseAbs();
+      for (Index i = 0; i < n; ++i) {
+        const double e = std::abs(out[i] - ref[i]) / (std::numeric_limits<double>::epsilon() * mag[i]);
+        worst = std::max(worst, e);
+        CHECK(e <= 8.0);
+      }
+      // a range of rows gives those rows of the whole
+      if (n > 4) {
+        Vector part = out0;
+        p.add(u.data(), v.data(), part.data(), 2, n - 1);
+        CHECK(bitwise_equal(part.segment(2, n - 3), out.segment(2, n - 3)));
+        CHECK(part[0] == out0[0] && part[1] == out0[1] && part[n - 1] == out0[n - 1]);
+      }
+      ++cases;
+    };
+    const double alpha = 0.37, beta = 2.3e-3;
+    const SparseMatrix C = SparseMatrix(alpha * Mlump) + SparseMatrix(beta * K);  // as an engineer assembles it
+    check(C, true, Form::rayleigh, "Rayleigh, lumped");
+    if (n > 17) {
+      const nvib::LinearProduct p(K, C, &m);
+      CHECK(std::abs(p.rayleigh_alpha() - alpha) <= 1e-14 * alpha && std::abs(p.rayleigh_beta() - beta) <= 1e-14 * beta);
+    }
+    check(SparseMatrix(beta * K), true, Form::rayleigh, "stiffness-proportional");
+    check(SparseMatrix(alpha * Mlump), true, Form::rayleigh, "mass-proportional");
+    check(C, false, Form::shared, "Rayleigh, mass not lumped");  // K's pattern (its diagonal is full)
+    SparseMatrix off = C;  // one entry 1e-9 off the form: not Rayleigh, still K's pattern
+    off.coeffRef(0, 0) *= 1.0 + 1e-9;
+    check(off, true, Form::shared, "Rayleigh plus 1e-9 in one entry");
+    SparseMatrix damper(n, n);  // one damper between DOFs 0 and n - 1: not K's pattern
+    damper.insert(0, 0) = 3.0, damper.insert(n - 1, n - 1) = 3.0;
+    if (n > 1) damper.insert(0, n - 1) = -3.0, damper.insert(n - 1, 0) = -3.0;
+    check(damper, true, Form::rows, "one damper");
+  }
+  std::printf("LinearProduct rayleigh / shared: %d cases, within %.1f eps of the rows' sums\n", cases, worst);
+}
+
 }  // namespace
 
 int main() {
   linear_product_cases();
+  linear_product_reordered_cases();
   using LS = nvib::LinearSolverChoice;
   using Mode = nvib::NewtonMode;
   const Index n = 120;

@@ -1,16 +1,27 @@
 // out += K u + C v for the constant linear parts of a model, the product every explicit step and
-// every residual makes. By rows: each row's terms are added in the order of a product by columns
-// (K's, then C's, columns ascending), so that every way below gives the same sums, bit for bit.
-//
-// Two ways, chosen once when the model is built:
-//   band  K and C each a complete band of half-width 0, 1 or 2 (every position of the band stored:
-//         a chain, a shear building, a beam on springs): the band's entries row by row, the width
-//         known at compile time, interior rows without range tests. On the six-storey building it
-//         takes half the instructions of the general way.
-//   rows  any pattern: the compressed rows of K and C.
+// every residual makes. Four ways, chosen once when the model is built:
+//   band      K and C each a complete band of half-width 0, 1 or 2 (every position of the band stored:
+//             a chain, a shear building, a beam on springs): the band's entries row by row, the width
+//             known at compile time, interior rows without range tests. On the six-storey building it
+//             takes half the instructions of the general way.
+//   rayleigh  a lumped mass m and C = alpha diag(m) + beta K to round-off (Rayleigh damping as an
+//             engineer assembles it, or mass- or stiffness-proportional damping): by rows,
+//             K (u + beta v) + alpha m v. The product reads K's indices and values once where the
+//             others read those of K and of C: half the memory traffic of a large model's step.
+//   shared    K and C stored on one pattern (a consistent mass's Rayleigh damping, any C assembled on
+//             K's pattern): by rows, each column's K and C terms together, the indices read once.
+//   rows      any pattern: the compressed rows of K, then those of C.
+// The band and the rows add each row's terms in the order of a product by columns (K's, then C's,
+// columns ascending): they agree bit for bit. The rayleigh and shared ways reorder the sums (and
+// rayleigh rounds beta v and u + beta v): they agree with the rows to round-off, a few units in the last
+// place of the products' magnitudes |K| |u| + |C| |v| (tests/cpp/test_sparse.cpp). They are taken for
+// K and C of kReorderFrom stored entries or more (FE models, where the product is much of a step);
+// smaller models keep the rows' sums bit for bit.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include "../base/types.hpp"
@@ -22,8 +33,10 @@ class LinearProduct {
   using RowMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
   LinearProduct() = default;
-  // K, C: square, compressed; an empty one (no stored entry) takes no part.
-  LinearProduct(const SparseMatrix& K, const SparseMatrix& C) : n_(std::max(K.rows(), C.rows())) {
+  // K, C: square, compressed; an empty one (no stored entry) takes no part. lumped_mass: the diagonal
+  // of a lumped mass (nullptr for another mass), against which C is tried for Rayleigh damping.
+  LinearProduct(const SparseMatrix& K, const SparseMatrix& C, const Vector* lumped_mass = nullptr)
+      : n_(std::max(K.rows(), C.rows())) {
     K_ = K;
     C_ = C;
     K_.makeCompressed();
@@ -34,11 +47,26 @@ class LinearProduct {
       kb_ = band_values(K_, bk, n_);
       cb_ = band_values(C_, bc, n_);
       kernel_ = pick(bk, bc);
-      banded_ = true;
+      form_ = Form::band;
       K_ = RowMatrix();  // the band holds every entry
       C_ = RowMatrix();
+    } else if (bk == kNone && bc == kNone) {
+      kernel_ = &add_rows;  // nothing to add
+      form_ = Form::none;
+    } else if (K_.nonZeros() + C_.nonZeros() < kReorderFrom) {
+      kernel_ = &add_rows;  // a small product: the rows' sums, as they always were
+      form_ = Form::rows;
+    } else if (lumped_mass && lumped_mass->size() == n_ && rayleigh_of(K_, C_, *lumped_mass, alpha_, beta_)) {
+      alpha_m_ = alpha_ * *lumped_mass;
+      kernel_ = &add_rayleigh;
+      form_ = Form::rayleigh;
+      C_ = RowMatrix();  // C = alpha M + beta K: K and alpha m hold it
+    } else if (same_pattern(K_, C_)) {
+      kernel_ = &add_shared;
+      form_ = Form::shared;
     } else {
       kernel_ = &add_rows;
+      form_ = Form::rows;
     }
   }
 
@@ -46,8 +74,23 @@ class LinearProduct {
   void add(const double* u, const double* v, double* out) const { kernel_(*this, u, v, out, 0, n_); }
   // The same for rows r0 .. r1 - 1 only (they read u and v within reach() of the rows).
   void add(const double* u, const double* v, double* out, Index r0, Index r1) const { kernel_(*this, u, v, out, r0, r1); }
-  // The band form is used (else the compressed rows).
-  bool banded() const { return banded_; }
+  enum class Form { none, band, rayleigh, shared, rows };
+  // Which way the product is taken (see the top of this file), and its name.
+  Form form() const { return form_; }
+  const char* form_name() const {
+    switch (form_) {
+      case Form::band: return "band";
+      case Form::rayleigh: return "rayleigh";
+      case Form::shared: return "shared";
+      case Form::none: return "none";
+      default: return "rows";
+    }
+  }
+  // The band form is used.
+  bool banded() const { return form_ == Form::band; }
+  // The coefficients of C = alpha M + beta K where form() is rayleigh (else 0).
+  double rayleigh_alpha() const { return alpha_; }
+  double rayleigh_beta() const { return beta_; }
   // How far from its row a row's entries lie: max |i - j| over the stored entries of K and C.
   Index reach() const { return reach_; }
 
@@ -57,11 +100,74 @@ class LinearProduct {
   static constexpr int kGeneral = -2;  // not a complete band of half-width <= 2
   static constexpr int kMaxBand = 2;
 
+ public:
+  // K and C holding fewer stored entries than this together keep the rows' sums (rayleigh and shared
+  // reorder them): in a small model the product is a small part of a step, and its trajectories stay
+  // bit for bit those of the rows.
+  static constexpr Index kReorderFrom = 4096;
+
+ private:
+
   static Index reach_of(const RowMatrix& A) {
     Index r = 0;
     for (Index i = 0; i < A.outerSize(); ++i)
       for (RowMatrix::InnerIterator it(A, i); it; ++it) r = std::max<Index>(r, std::abs(it.col() - i));
     return r;
+  }
+  // K and C store the same positions (and both store some).
+  static bool same_pattern(const RowMatrix& K, const RowMatrix& C) {
+    if (K.nonZeros() == 0 || K.nonZeros() != C.nonZeros() || K.outerSize() != C.outerSize()) return false;
+    return std::equal(K.outerIndexPtr(), K.outerIndexPtr() + K.outerSize() + 1, C.outerIndexPtr()) &&
+           std::equal(K.innerIndexPtr(), K.innerIndexPtr() + K.nonZeros(), C.innerIndexPtr());
+  }
+  // Whether C = alpha diag(m) + beta K to round-off, and alpha and beta. beta is C_ij / K_ij at the
+  // largest off-diagonal |K_ij|; alpha is (C_ii - beta K_ii) / m_i at the diagonal position where that
+  // difference cancels least. Then every position stored in K or C or on the diagonal must satisfy
+  //   |C_ij - (alpha m_i [i = j] + beta K_ij)| <= 64 eps (|alpha m_i [i = j]| + |beta K_ij|),
+  // a few roundings of C's own assembly and of the two coefficients: a C that is not of this form
+  // (a damper between two DOFs, a modal damping matrix) misses it by far more.
+  static bool rayleigh_of(const RowMatrix& K, const RowMatrix& C, const Vector& m, double& alpha, double& beta) {
+    alpha = beta = 0.0;
+    const Index n = K.outerSize();
+    if (K.nonZeros() == 0 || C.nonZeros() == 0 || C.outerSize() != n || m.size() != n) return false;
+    const int *ko = K.outerIndexPtr(), *ki = K.innerIndexPtr(), *co = C.outerIndexPtr(), *ci = C.innerIndexPtr();
+    const double *kv = K.valuePtr(), *cv = C.valuePtr();
+    // f(i, j, K_ij, C_ij) over the union of K's and C's positions and the diagonal, by rows
+    auto for_each_position = [&](auto&& f) {
+      for (Index i = 0; i < n; ++i) {
+        int p = ko[i], pe = ko[i + 1], q = co[i], qe = co[i + 1];
+        bool diagonal = false;
+        while (p < pe || q < qe) {
+          const int j = (q >= qe || (p < pe && ki[p] <= ci[q])) ? ki[p] : ci[q];
+          const double kij = (p < pe && ki[p] == j) ? kv[p++] : 0.0;
+          const double cij = (q < qe && ci[q] == j) ? cv[q++] : 0.0;
+          diagonal = diagonal || j == i;
+          if (!f(i, Index(j), kij, cij)) return false;
+        }
+        if (!diagonal && !f(i, i, 0.0, 0.0)) return false;
+      }
+      return true;
+    };
+    double kbig = 0.0;
+    for_each_position([&](Index i, Index j, double kij, double cij) {
+      if (i != j && std::abs(kij) > kbig) kbig = std::abs(kij), beta = cij / kij;
+      return true;
+    });
+    if (kbig == 0.0) return false;  // K diagonal: nothing tells beta from alpha
+    double least_cancelled = -1.0;
+    for_each_position([&](Index i, Index j, double kij, double cij) {
+      if (i != j) return true;
+      const double r = cij - beta * kij, size = std::abs(cij) + std::abs(beta * kij);
+      const double share = size > 0.0 ? std::abs(r) / size : 0.0;
+      if (share > least_cancelled && m[i] > 0.0) least_cancelled = share, alpha = r / m[i];
+      return true;
+    });
+    if (!std::isfinite(alpha) || !std::isfinite(beta)) return false;
+    const double tol = 64.0 * std::numeric_limits<double>::epsilon();
+    return for_each_position([&](Index i, Index j, double kij, double cij) {
+      const double am = i == j ? alpha * m[i] : 0.0, bk = beta * kij;
+      return std::abs(cij - (am + bk)) <= tol * (std::abs(am) + std::abs(bk));
+    });
   }
   // The half-width B of A's band if every position of it is stored (rows i, columns max(0, i - B) ..
   // min(n - 1, i + B), nothing else): -1 if A stores nothing, -2 if A is not such a band.
@@ -139,6 +245,36 @@ class LinearProduct {
       out[i] = s;
     }
   }
+  // C = alpha diag(m) + beta K: row i is sum_j K_ij (u_j + beta v_j) + alpha m_i v_i.
+  static void add_rayleigh(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
+                           double* __restrict out, Index r0, Index r1) {
+    const int *ko = p.K_.outerIndexPtr(), *ki = p.K_.innerIndexPtr();
+    const double* __restrict kv = p.K_.valuePtr();
+    const double* __restrict am = p.alpha_m_.data();
+    const double beta = p.beta_;
+    for (Index i = r0; i < r1; ++i) {
+      double s = out[i];
+      for (int q = ko[i], e = ko[i + 1]; q < e; ++q) {
+        const int j = ki[q];
+        s += kv[q] * (u[j] + beta * v[j]);
+      }
+      out[i] = s + am[i] * v[i];
+    }
+  }
+  // K and C on one pattern: each position's two terms together.
+  static void add_shared(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
+                         double* __restrict out, Index r0, Index r1) {
+    const int *ko = p.K_.outerIndexPtr(), *ki = p.K_.innerIndexPtr();
+    const double *__restrict kv = p.K_.valuePtr(), *__restrict cv = p.C_.valuePtr();
+    for (Index i = r0; i < r1; ++i) {
+      double s = out[i];
+      for (int q = ko[i], e = ko[i + 1]; q < e; ++q) {
+        const int j = ki[q];
+        s += kv[q] * u[j] + cv[q] * v[j];
+      }
+      out[i] = s;
+    }
+  }
   template <int BK>
   static Kernel pick_c(int bc) {
     switch (bc) {
@@ -160,8 +296,10 @@ class LinearProduct {
   Index n_ = 0, reach_ = 0;
   RowMatrix K_, C_;
   std::vector<double> kb_, cb_;
+  Vector alpha_m_;  // alpha m (rayleigh)
+  double alpha_ = 0.0, beta_ = 0.0;
   Kernel kernel_ = &add_rows;
-  bool banded_ = false;
+  Form form_ = Form::none;
 };
 
 }  // namespace nvib

@@ -199,7 +199,8 @@ class Model {
     has_C_ = check_linear_part(C, "C", n, lin->warnings, !parts.summed);
     lin->K = std::move(K);
     lin->C = std::move(C);
-    lin->product = LinearProduct(has_K_ ? lin->K : SparseMatrix(n, n), has_C_ ? lin->C : SparseMatrix(n, n));
+    lin->product = LinearProduct(has_K_ ? lin->K : SparseMatrix(n, n), has_C_ ? lin->C : SparseMatrix(n, n),
+                                 mass_.is_diagonal() ? &mass_.diagonal_entries() : nullptr);
     lin_ = std::move(lin);
     uses_velocity_ = has_C_ || traits::uses_velocity(f_);
     uses_time_ = traits::uses_time(f_);
@@ -217,6 +218,8 @@ class Model {
   bool has_C() const { return has_C_; }
   const SparseMatrix& K() const { return lin_->K; }
   const SparseMatrix& C() const { return lin_->C; }
+  // How K u + C v is taken (band, rayleigh, shared or rows: linear_product.hpp).
+  const LinearProduct& linear_product() const { return lin_->product; }
   // What an accepted model still wants said ("mass: nearly singular ...", "K: nearly symmetric ..."), each
   // prefixed by the argument it is about.
   const std::vector<std::string>& warnings() const { return lin_->warnings; }
