@@ -120,11 +120,26 @@ int main() {
     }
     SparseMatrix K(n, n), C(n, n);
     K.setFromTriplets(t.begin(), t.end());
-    C = 1e-3 * K;
     Vector m(n);
     for (Index k = 0; k < n; ++k) m[k] = 1.0 + 0.5 * std::sin(0.3 * double(k));
-    same_bits("chain: bilinear + cubic, masses, partial ground motion, K + C band",
-              fx::make_effect_model(nvib::Mass::diagonal(m), std::move(list), std::move(arrays), K, C));
+    // K u + C v in each of its general forms (linear_product.hpp): C = beta K and C = alpha m + beta K
+    // (rayleigh), C on K's pattern otherwise (shared), C on another pattern (rows)
+    SparseMatrix Mm(n, n);
+    for (Index k = 0; k < n; ++k) Mm.insert(k, k) = m[k];
+    SparseMatrix other = 1e-3 * K;
+    other.coeffRef(n / 2, n / 2) *= 1.5;  // not of Rayleigh's form
+    SparseMatrix apart(n, n);             // dampers one DOF apart: another pattern than K's
+    for (Index k = 0; k + 1 < n; ++k) apart.insert(k, k + 1) = -0.1, apart.insert(k + 1, k) = -0.1;
+    for (Index k = 0; k < n; ++k) apart.insert(k, k) = 0.2;
+    const std::pair<SparseMatrix, const char*> cs[] = {{SparseMatrix(1e-3 * K), "rayleigh"},
+                                                      {SparseMatrix(SparseMatrix(0.3 * Mm) + SparseMatrix(1e-3 * K)), "rayleigh"},
+                                                      {other, "shared"},
+                                                      {apart, "rows"}};
+    for (const auto& [C, form] : cs) {
+      auto model = fx::make_effect_model(nvib::Mass::diagonal(m), list, arrays, K, C);
+      CHECK(std::string(model.linear_product().form_name()) == form);
+      same_bits((std::string("chain: bilinear + cubic, masses, partial ground motion, K + C ") + form).c_str(), model);
+    }
   }
   // 3. Local but not a chain: ties two DOFs apart, in both orders, and ground springs (a general
   //    kernel in every stage); no velocity-dependent force (no predictor).
