@@ -20,6 +20,11 @@ namespace nvib {
 class SparseFactorization {
  public:
   const char* name() const { return lu_now_ ? "sparse LU" : ldlt_.supernodal() ? "supernodal LDLT" : "sparse LDLT"; }
+  // The same, as the base of a low-rank update (newton/low_rank.hpp).
+  const char* name_with_low_rank() const {
+    return lu_now_ ? "sparse LU + low-rank update"
+                   : ldlt_.supernodal() ? "supernodal LDLT + low-rank update" : "sparse LDLT + low-rank update";
+  }
 
   // The pattern of every matrix to come (S's, values ignored); symmetric: try LDL^T first.
   void analyze(const SparseMatrix& S, bool symmetric) {

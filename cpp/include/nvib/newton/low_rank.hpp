@@ -110,7 +110,8 @@ class LowRankUpdate {
     base_ok_ = Z_.allFinite();
     return base_ok_;
   }
-  const char* base_name() const { return s0_.name(); }
+  // "supernodal LDLT + low-rank update", ...: the factorisation of S0 and the update.
+  const char* name() const { return s0_.name_with_low_rank(); }
 
   // Whether A is, bit for bit, the A factorised last (its factors can be kept).
   bool same_as_last() const {

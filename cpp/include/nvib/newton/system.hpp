@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <string>
 
 #include "../base/types.hpp"
@@ -48,7 +47,7 @@ class IterationSystem {
     if (!chosen_) return "";
     if (kind_ == Kind::dense) return kDenseName;
     if (kind_ == Kind::banded && !band_failed_) return kBandedName;
-    if (kind_ == Kind::low_rank) return low_rank_name(low_rank_.base_name());
+    if (kind_ == Kind::low_rank) return low_rank_.name();
     return sparse_lu_.name();
   }
   bool is_dense() const { return kind_ == Kind::dense; }
@@ -130,11 +129,6 @@ class IterationSystem {
   }
 
  private:
-  static const char* low_rank_name(const char* base) {
-    for (const char* name : kLinearSolverNames)
-      if (std::strncmp(name, base, std::strlen(base)) == 0 && std::strstr(name, "low-rank") != nullptr) return name;
-    return "low-rank update";
-  }
   // The effects' tangent alone (S's linear part keeps its factors): reused when A is the last one.
   template <class ModelT>
   bool factorize_low_rank(ModelT& model, const IterationMatrix& im, Stats& st) {
