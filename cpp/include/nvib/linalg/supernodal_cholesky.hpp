@@ -10,8 +10,10 @@
 //     nested dissection (George 1973) by multilevel bisection (Hendrickson & Leland 1995; Karypis &
 //     Kumar 1998: heavy-edge matching, greedy growing, Fiduccia & Mattheyses 1982 refinement, a
 //     vertex separator as the minimum vertex cover of the cut edges) on the graph compressed to one
-//     vertex a node (Ashcraft 1995); of the two the one whose factor needs fewer flops, as CHOLMOD
-//     chooses (on 3-D meshes nested dissection, 6x fewer flops; on chains and bands AMD);
+//     vertex a node (Ashcraft 1995); nested dissection where its factor needs clearly fewer flops
+//     and entries than AMD's (CHOLMOD chooses by flops alone; here the solves, which read the
+//     entries, are most of a run's cost): on 3-D meshes nested dissection, 4-6x fewer flops; on
+//     chains, bands and most 2-D meshes AMD;
 //   - a postorder of the elimination tree, which leaves the fill unchanged and makes every supernode
 //     a range of consecutive columns; the tree by Liu's algorithm with path compression (Liu 1990,
 //     "The role of elimination trees in sparse factorization");
@@ -72,7 +74,7 @@ struct SupernodeRelaxation {
 };
 
 // The fill-reducing ordering. automatic: AMD, and where AMD's factor has large fronts nested dissection
-// too, the one whose factor needs fewer flops kept.
+// too, kept where it needs clearly fewer flops and entries (SupernodalCholesky::analyze).
 enum class SupernodalOrdering { automatic, amd, nested_dissection };
 
 namespace supernodal_detail {
@@ -709,6 +711,10 @@ inline void nested_dissection(const SparseMatrix& A, std::vector<int>& perm) {
 template <bool LDLT>
 class SupernodalCholesky {
  public:
+  // The automatic ordering keeps nested dissection where its factor needs at most these fractions of
+  // AMD's flops and entries (analyze()).
+  static constexpr double kNestedDissectionFlops = 0.8;
+  static constexpr double kNestedDissectionEntries = 0.95;
   // Read by analyze(); change it before analyze() to trade explicit zeros for larger dense blocks.
   SupernodeRelaxation relaxation;
   // Read by analyze(): the fill-reducing ordering (automatic: AMD, or nested dissection where it needs
@@ -980,12 +986,22 @@ void SupernodalCholesky<LDLT>::analyze(const SparseMatrix& A) {
   } else {
     // Nested dissection only where AMD's factor has large fronts (its columns average 32 entries or
     // more): on chains and bands it cannot do better and costs more than the rest of the analysis.
+    // It is kept where it saves a clear share of both costs: a fifth of the factorisation's flops and
+    // a twentieth of the factor's entries, which every solve reads. On 3-D meshes it saves far more
+    // (a 12 x 12 x 12 block of bricks: 4x fewer flops, 1.9x fewer entries); on 2-D meshes the two
+    // orderings are close, and where nested dissection's gain was a few per cent of the flops its
+    // relaxed supernodes stored more entries than AMD's (solves up to 12 % slower) after an analysis
+    // 3 to 7 times as long (benchmarks/fe_newton.py's walls).
     const double f_amd = symbolic(amd);
+    const Index nnz_amd = nnz_exact_;
     used_ = SupernodalOrdering::amd;
-    if (f_amd >= 32.0 * static_cast<double>(nnz_exact_)) {
+    if (f_amd >= 32.0 * static_cast<double>(nnz_amd)) {
       supernodal_detail::nested_dissection(A, nd);
       used_ = SupernodalOrdering::nested_dissection;
-      if (symbolic(nd) >= f_amd) symbolic(amd), used_ = SupernodalOrdering::amd;
+      const double f_nd = symbolic(nd);
+      if (!(f_nd <= kNestedDissectionFlops * f_amd &&
+            static_cast<double>(nnz_exact_) <= kNestedDissectionEntries * static_cast<double>(nnz_amd)))
+        symbolic(amd), used_ = SupernodalOrdering::amd;
     }
   }
 
