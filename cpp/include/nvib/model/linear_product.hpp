@@ -74,6 +74,11 @@ class LinearProduct {
   void add(const double* u, const double* v, double* out) const { kernel_(*this, u, v, out, 0, n_); }
   // The same for rows r0 .. r1 - 1 only (they read u and v within reach() of the rows).
   void add(const double* u, const double* v, double* out, Index r0, Index r1) const { kernel_(*this, u, v, out, r0, r1); }
+  // K and C holding fewer stored entries than this together keep the rows' sums (rayleigh and shared
+  // reorder them): in a small model the product is a small part of a step, and its trajectories stay
+  // bit for bit those of the rows.
+  static constexpr Index kReorderFrom = 4096;
+
   enum class Form { none, band, rayleigh, shared, rows };
   // Which way the product is taken (see the top of this file), and its name.
   Form form() const { return form_; }
@@ -99,14 +104,6 @@ class LinearProduct {
   static constexpr int kNone = -1;     // no matrix
   static constexpr int kGeneral = -2;  // not a complete band of half-width <= 2
   static constexpr int kMaxBand = 2;
-
- public:
-  // K and C holding fewer stored entries than this together keep the rows' sums (rayleigh and shared
-  // reorder them): in a small model the product is a small part of a step, and its trajectories stay
-  // bit for bit those of the rows.
-  static constexpr Index kReorderFrom = 4096;
-
- private:
 
   static Index reach_of(const RowMatrix& A) {
     Index r = 0;
