@@ -183,7 +183,8 @@ class Model:
 
     def __init__(self, mass, *, K=None, C=None, force=None, tangent=None, effects=None, dofs=None,
                  u0=None, v0=None, uses_velocity: bool = True, uses_time: bool = True, without=(), name: str = "",
-                 units="m"):
+                 units="m", _mass_of=None):
+        # _mass_of: the core of a model with this very mass (_rebuilt()), whose factorised mass is shared
         if effects is not None and not isinstance(effects, list):
             effects = list(effects)  # once: a generator is read here
         # The arguments, for pickling and copying (the core model is rebuilt from them).
@@ -263,7 +264,7 @@ class Model:
             raise _checks.value_error("without", "only a model of declared effects can leave effects out")
         # With Python in the loop (force or callable laws) the GIL is kept during runs.
         self._core = _core.Model(m, builtin, Km, Cm, dofs, force, tangent, _checks.boolean("uses_velocity", uses_velocity),
-                                 _checks.boolean("uses_time", uses_time), laws, arrays, vector_laws)
+                                 _checks.boolean("uses_time", uses_time), laws, arrays, vector_laws, _mass_of)
 
     def __repr__(self) -> str:
         """Size, DOFs, mass, linear parts, effects by type, Python callables and flags, in one line."""
@@ -313,9 +314,20 @@ class Model:
         return {k: v for k, v in self.__dict__.items() if k not in ("_core", "_lookup", "_init")}
 
     def _rebuilt(self, **changes) -> "Model":
-        """The model built again from its arguments with ``changes`` (effects=, C=, ...), its attributes kept."""
+        """The model built again from its arguments with ``changes`` (effects=, C=, ...), its attributes kept.
+        The mass is not among the changes: the new model shares this one's, factorised (a consistent mass of a
+        large model takes longer to factorise than many runs: a batch builds one model per run)."""
+        if "mass" in changes:
+            raise ValueError("_rebuilt() keeps the mass")
         mass, kwargs = self._init
-        return _rebuild_model((mass, {**kwargs, **changes}), self._state())
+        model = Model(mass, **{**kwargs, **changes}, _mass_of=self._core)
+        state = self._state()
+        # What was computed from the linear part (the modes of the stability check) holds for the new model
+        # only if its K and C are this one's: other C (rayleigh()) or other linear springs change them.
+        if "_linear_modes" in state and ((model.K != self.K).nnz or (model.C != self.C).nnz):
+            del state["_linear_modes"]
+        model.__dict__.update(state)
+        return model
 
     def _python_law(self, i: int, spec: dict):
         """A scalar law given as Python callables on a measure: {"type": "callable", "measure": {...},

@@ -154,8 +154,11 @@ inline PyModel make_model(const py::object& mass, std::vector<fx::Effect> list, 
                           const nvib::SparseMatrix& C,
                           py::object dofs, py::object force, py::object tangent, bool uses_velocity,
                           bool uses_time, std::vector<LawSpec> laws, std::vector<fx::EffectArray> arrays,
-                          std::vector<ArrayLawSpec> vector_laws) {
-  nvib::Mass ms = make_mass(mass, dof_namer(dofs));
+                          std::vector<ArrayLawSpec> vector_laws, const py::object& mass_of) {
+  // mass_of: a model whose mass this one has (a model rebuilt with other effects or C: its mass, factorised,
+  // is shared instead of factorised again; `mass` is then not read)
+  nvib::Mass ms = mass_of.is_none() ? make_mass(mass, dof_namer(dofs))
+                                    : mass_of.cast<const PyModel&>().visit([](const auto& md) { return md.mass(); });
   if (static_cast<Index>(py::len(dofs)) != ms.size())
     raise_value_error("dofs", "expected " + std::to_string(ms.size()) + " names, got " + std::to_string(py::len(dofs)));
   for (const fx::EffectArray& a : arrays)
@@ -373,7 +376,8 @@ inline void bind_models(py::module_& m) {
       .def(py::init(&make_model), py::arg("mass"), py::arg("effects"), py::arg("K"), py::arg("C"), py::arg("dofs"),
            py::arg("force") = py::none(), py::arg("tangent") = py::none(), py::arg("uses_velocity") = true,
            py::arg("uses_time") = true, py::arg("laws") = std::vector<LawSpec>{},
-           py::arg("arrays") = std::vector<fx::EffectArray>{}, py::arg("vector_laws") = std::vector<ArrayLawSpec>{})
+           py::arg("arrays") = std::vector<fx::EffectArray>{}, py::arg("vector_laws") = std::vector<ArrayLawSpec>{},
+           py::arg("mass_of") = py::none())
       .def_readonly("dofs", &PyModel::dofs)
       .def_property_readonly("has_python", &PyModel::python, "the model calls Python (the GIL is kept)")
       .def_property_readonly("size", [](const PyModel& p) { return p.visit([](auto& md) { return md.size(); }); })

@@ -87,3 +87,21 @@ def test_bad_arguments_named():
         assert exc.value.argument == arg
     assert nvib.rayleigh_coefficients(0.05, [2.0, 20.0]) == pytest.approx((0.05 * 2 * 2 * 20 / 22, 0.05 * 2 / 22),
                                                                           rel=1e-14)
+
+
+def test_a_damped_copy_checks_its_step_against_its_own_modes():
+    """rayleigh() builds a new model from the given one; what the stability check keeps on a model (its modes
+    and their damping ratios) must not follow it there: the damping shrinks an explicit scheme's limit. The
+    undamped two-storey model's limit is 0.01236 s; with beta = 0.01 its top mode has zeta = 0.81 and the
+    limit falls to 0.00351 s."""
+    from nvib.analysis import stability
+
+    undamped = nvib.Model([1.0, 1.0], K=[[2e4, -1e4], [-1e4, 1e4]])
+    assert stability.step_warning(undamped, nvib.CentralDifference(), 0.011) is None  # its modes are now kept
+    damped = nvib.rayleigh(undamped, alpha=0.0, beta=0.01)
+    note = stability.step_warning(damped, nvib.CentralDifference(), 0.011)
+    assert note is not None and "dt <= 0.003511 s" in note
+    # a copy with the same K and C (other signals, as a batch makes) keeps them: same answer, no new eigensolve
+    same = damped._rebuilt(effects=None)
+    assert same._linear_modes is damped._linear_modes
+    assert stability.step_warning(same, nvib.CentralDifference(), 0.011) == note
