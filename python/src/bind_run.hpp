@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 
@@ -207,6 +208,17 @@ inline void bind_run(py::module_& m) {
   m.def("steps_to_reach", &nvib::steps_to_reach, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
         "the number of steps of a run (t_end - t0)/dt, rounded up unless an integer to round-off");
   m.def("check_time_step", &nvib::check_time_step, py::arg("dt"), "the one check of a time step (ArgumentError naming dt)");
+  m.def(
+      "ordering_cache",
+      [](bool clear) {
+        auto& c = nvib::supernodal_detail::ordering_cache();
+        if (clear) c.clear();
+        std::lock_guard<std::mutex> lock(c.mutex);
+        return py::make_tuple(c.items.size(), c.hits);
+      },
+      py::arg("clear") = false,
+      "(patterns kept, orderings reused so far) of the sparse factorisations' ordering cache; clear=True "
+      "forgets the patterns first (a benchmark of cold runs)");
   m.def("run_steps", &nvib::run_steps, py::arg("t0"), py::arg("t_end"), py::arg("dt"),
         "steps_to_reach for a whole run (solve): a step longer than the run is refused naming dt");
   m.def(

@@ -19,6 +19,7 @@
 #include <functional>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "check.hpp"
@@ -428,6 +429,61 @@ int main() {
         run(f);
       }
     }
+  }
+
+  // The ordering kept for the next matrix of the same pattern (a batch's runs on one model): taken from
+  // the cache, it gives the same permutation and the same factors, bit for bit; another pattern, another
+  // requested ordering or a small matrix is analysed afresh.
+  {
+    using O = nvib::SupernodalOrdering;
+    using F = nvib::SupernodalCholesky<true>;
+    // A pattern of this test alone: a 3-D solid with one extra coupling far off the diagonal.
+    SparseMatrix base = elastic_block(9, 8, 7, 1e4);
+    SparseMatrix extra(base.rows(), base.cols());
+    extra.insert(base.rows() - 1, 0) = 1e-3;
+    const SparseMatrix a1 = SparseMatrix(base + extra);
+    const SparseMatrix a2 = SparseMatrix(elastic_block(9, 8, 7, 3e6) + extra);  // same pattern, other values
+    CHECK(a1.rows() >= F::kOrderingCacheFrom);
+    F f1, f2, f3, fo;
+    f1.analyze(a1);
+    CHECK(!f1.ordering_reused());
+    f2.analyze(a2);
+    CHECK(f2.ordering_reused());
+    CHECK(f2.permutation() == f1.permutation() && f2.ordering_used() == f1.ordering_used());
+    CHECK(f2.nonzeros() == f1.nonzeros() && f2.flops() == f1.flops() && f2.supernodes() == f1.supernodes());
+    f3.analyze(a2);  // a2 again, analysed from the kept ordering: the factors of a fresh analysis, bit for bit
+    f1.analyze(a2);
+    f1.factorize_values(a2);
+    f3.factorize_values(a2);
+    CHECK(f1.info() == Eigen::Success && f3.info() == Eigen::Success);
+    CHECK(f1.pivots() == f3.pivots());
+    Vector b = Vector::LinSpaced(a2.rows(), -1.0, 2.0), x1 = b, x3 = b, work(a2.rows());
+    f1.solve_in_place(x1.data(), work);
+    f3.solve_in_place(x3.data(), work);
+    CHECK(x1 == x3);
+    CHECK(residual(symmetric_of(a2), x3, b) <= 1e-10);
+    fo.ordering = O::amd;  // another requested ordering: its own entry
+    fo.analyze(a1);
+    CHECK(!fo.ordering_reused());
+    const SparseMatrix other = elastic_block(9, 8, 6, 1e4);  // another pattern
+    F g;
+    g.analyze(other);
+    CHECK(!g.ordering_reused());
+    const SparseMatrix small = grid_matrix(20, 20, 1, true, 1, gen);  // 400 rows: not kept
+    F s1, s2;
+    s1.analyze(small);
+    s2.analyze(small);
+    CHECK(!s2.ordering_reused());
+    // Threads analysing one pattern at once: each gets a correct analysis, and the cache one entry.
+    std::vector<std::thread> threads;
+    std::vector<F> fs(4);
+    const SparseMatrix a3 = elastic_block(9, 9, 7, 1e4);
+    for (auto& f : fs) threads.emplace_back([&f, &a3] { f.analyze(a3); });
+    for (auto& t : threads) t.join();
+    for (auto& f : fs) CHECK(f.permutation() == fs[0].permutation());
+    F after;
+    after.analyze(a3);
+    CHECK(after.ordering_reused());
   }
 
   // Indefinite (no zero pivot): LL^T reports it, LDL^T solves it, with the inertia of Eigen's LDL^T.

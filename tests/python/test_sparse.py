@@ -420,3 +420,33 @@ def test_an_effect_array_takes_one_j_for_every_effect():
     assert not np.array_equal(run(-1), run("d"))
     with pytest.raises(nvib.ArgumentError, match=r"effects\[0\]\.j\[0\]"):
         run(4)
+
+
+def test_a_run_reuses_the_ordering_an_earlier_run_of_the_same_pattern_kept():
+    """The fill-reducing orderings of a sparse factorisation are kept by pattern (from 1000 rows): the second
+    run on a 1,296-DOF block, and a run on a model built anew from the same arrays with another ground
+    motion (a batch's run), order nothing, and give the bits of a run that ordered from scratch."""
+    import _fe_mesh
+    from nvib import _core
+
+    parts = _fe_mesh.nonlinear_model(8, 8, 5)  # 9 x 9 x 6 nodes, clamped base: 1,296 DOFs
+    model = _fe_mesh.nvib_model(parts)
+    assert model.n >= 1000
+    run = dict(dt=parts[-1] / 50, t_end=3 * parts[-1] / 50)
+    assert _core.ordering_cache(clear=True)[0] == 0
+    cold = nvib.solve(model, nvib.Newmark(), **run)
+    kept, hits = _core.ordering_cache()
+    assert kept >= 1  # the iteration matrix's pattern (the mass's was analysed before the clear)
+    warm = nvib.solve(model, nvib.Newmark(), **run)
+    assert _core.ordering_cache()[1] > hits
+    for key in ("u", "v", "a"):
+        np.testing.assert_array_equal(getattr(warm, key), getattr(cold, key))
+    batch = nvib.solve_many(model, nvib.Newmark(), scales=[1.0, 2.0], threads=2, progress=False, **run)
+    for key in ("u", "v", "a"):
+        np.testing.assert_array_equal(getattr(batch[0], key), getattr(cold, key))
+    _core.ordering_cache(clear=True)
+    fresh = nvib.solve(nvib.Model(model._init[0], **{**model._init[1], "effects": [
+        dict(e, signal={**e["signal"], "amplitude": 2 * e["signal"]["amplitude"]}) if e["type"] == "ground_acceleration"
+        else e for e in model._init[1]["effects"]]}), nvib.Newmark(), **run)
+    for key in ("u", "v", "a"):
+        np.testing.assert_array_equal(getattr(batch[1], key), getattr(fresh, key))
