@@ -315,8 +315,8 @@ class Model:
 
     def _rebuilt(self, **changes) -> "Model":
         """The model built again from its arguments with ``changes`` (effects=, C=, ...), its attributes kept.
-        The mass is not among the changes: the new model shares this one's, factorised (a consistent mass of a
-        large model takes longer to factorise than many runs: a batch builds one model per run)."""
+        The mass is not among the changes: the new model shares this one's, factorised (a batch builds one model
+        per run, and a large model's consistent mass takes a tenth of a second or more to factorise)."""
         if "mass" in changes:
             raise ValueError("_rebuilt() keeps the mass")
         mass, kwargs = self._init
