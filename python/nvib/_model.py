@@ -324,7 +324,7 @@ class Model:
         state = self._state()
         # What was computed from the linear part (the modes of the stability check) holds for the new model
         # only if its K and C are this one's: other C (rayleigh()) or other linear springs change them.
-        if "_linear_modes" in state and ((model.K != self.K).nnz or (model.C != self.C).nnz):
+        if "_linear_modes" in state and not model._core.same_linear_parts(self._core):
             del state["_linear_modes"]
         model.__dict__.update(state)
         return model

@@ -403,6 +403,21 @@ inline void bind_models(py::module_& m) {
                              "the linear stiffness: K given, linear springs (those of arrays included)")
       .def_property_readonly("C", [](const PyModel& p) { return linear_matrix(p, false); },
                              "the linear damping: C given, linear dampers (those of arrays included)")
+      .def("same_linear_parts", [](const PyModel& p, const PyModel& q) {
+        // K and C (springs and dampers of arrays included) equal, entry by entry, bit for bit: what was
+        // computed from one model's linear part holds for the other
+        auto same = [](const nvib::SparseMatrix& a, const nvib::SparseMatrix& b) {
+          if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros()) return false;
+          for (Index j = 0; j < a.outerSize(); ++j) {
+            nvib::SparseMatrix::InnerIterator x(a, j), y(b, j);
+            for (; x && y; ++x, ++y)
+              if (x.row() != y.row() || !(x.value() == y.value())) return false;
+            if (x || y) return false;
+          }
+          return true;
+        };
+        return same(linear_matrix(p, true), linear_matrix(q, true)) && same(linear_matrix(p, false), linear_matrix(q, false));
+      }, py::arg("other"), "K and C equal to the other model's, entry by entry (the stability check's modes hold for both)")
       .def_property_readonly("linear_product", [](const PyModel& p) {
         return p.visit([](auto& md) { return std::string(md.linear_product().form_name()); }); },
                              "how K u + C v is taken: band, rayleigh (C = alpha m + beta K, lumped m), shared "
