@@ -404,8 +404,8 @@ inline void bind_models(py::module_& m) {
       .def_property_readonly("C", [](const PyModel& p) { return linear_matrix(p, false); },
                              "the linear damping: C given, linear dampers (those of arrays included)")
       .def("same_linear_parts", [](const PyModel& p, const PyModel& q) {
-        // K and C (springs and dampers of arrays included) equal, entry by entry, bit for bit: what was
-        // computed from one model's linear part holds for the other
+        // K and C (springs and dampers of arrays included) equal, entry by entry (the same pattern, equal
+        // values): what was computed from one model's linear part holds for the other
         auto same = [](const nvib::SparseMatrix& a, const nvib::SparseMatrix& b) {
           if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros()) return false;
           for (Index j = 0; j < a.outerSize(); ++j) {

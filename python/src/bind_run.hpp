@@ -10,7 +10,6 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
 
@@ -213,8 +212,8 @@ inline void bind_run(py::module_& m) {
       [](bool clear) {
         auto& c = nvib::supernodal_detail::ordering_cache();
         if (clear) c.clear();
-        std::lock_guard<std::mutex> lock(c.mutex);
-        return py::make_tuple(c.items.size(), c.hits);
+        const auto [kept, hits] = c.counts();
+        return py::make_tuple(kept, hits);
       },
       py::arg("clear") = false,
       "(patterns kept, orderings reused so far) of the sparse factorisations' ordering cache; clear=True "

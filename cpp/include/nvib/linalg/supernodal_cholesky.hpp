@@ -711,67 +711,81 @@ inline void nested_dissection(const SparseMatrix& A, std::vector<int>& perm) {
 // The fill-reducing orderings analyze() chose last, by the pattern they were chosen for: a batch or an
 // incremental dynamic analysis runs one large model many times (each run's model built anew, with
 // other loads), and the orderings (AMD, and nested dissection to compare with it) are most of an
-// analysis (on a 14,640-DOF wall, 62 of 74 ms). A pattern is known by its size, its entries and a
-// 64-bit hash of its lower triangle; two patterns that share them are taken for one, which could only
-// cost fill: any permutation gives a correct factorisation (the factor's pattern is computed from A's,
-// not kept). Process-wide, for every thread (a lock around the list), the last kCapacity patterns.
+// analysis (on a 14,640-DOF wall, 74 ms with them, 8 ms with the kept one). A pattern is known by its
+// size, its entries and a 64-bit hash of its lower triangle; two patterns that share them are taken for
+// one, which could only cost fill: any permutation gives a correct factorisation (the factor's pattern
+// is computed from A's, not kept). Process-wide, for every thread (a lock around the list), the last
+// kCapacity patterns.
 struct OrderingCache {
   static constexpr size_t kCapacity = 8;
-  struct Item {
+  struct Key {
     Index n = 0, nnz = 0;
     std::uint64_t hash = 0;
-    SupernodalOrdering asked = SupernodalOrdering::automatic, used = SupernodalOrdering::amd;
+    SupernodalOrdering asked = SupernodalOrdering::automatic;
+    bool operator==(const Key& o) const { return n == o.n && nnz == o.nnz && hash == o.hash && asked == o.asked; }
+  };
+  struct Item {
+    Key key;
+    SupernodalOrdering used = SupernodalOrdering::amd;
     std::vector<int> order;  // row of A -> its position (before the postorder)
   };
-  std::mutex mutex;
-  std::list<Item> items;  // the most recently used first
-  Index hits = 0;
 
-  // The lower triangle's pattern, hashed (splitmix64's finaliser over each (row, column)); its entries.
-  static std::uint64_t hash_of(const SparseMatrix& A, Index& nnz) {
+  // A's key: its lower triangle's pattern hashed (splitmix64's finaliser over each (row, column)), its
+  // entries, the ordering asked for.
+  static Key key_of(const SparseMatrix& A, SupernodalOrdering asked) {
     auto mix = [](std::uint64_t x) {
       x ^= x >> 30, x *= 0xbf58476d1ce4e5b9ull;
       x ^= x >> 27, x *= 0x94d049bb133111ebull;
       return x ^ (x >> 31);
     };
-    std::uint64_t h = mix(static_cast<std::uint64_t>(A.rows()));
-    nnz = 0;
+    Key k;
+    k.n = A.rows();
+    k.asked = asked;
+    k.hash = mix(static_cast<std::uint64_t>(A.rows()));
     for (Index j = 0; j < A.outerSize(); ++j)
       for (SparseMatrix::InnerIterator it(A, j); it; ++it)
         if (it.row() >= j) {
-          h = mix(h ^ (static_cast<std::uint64_t>(it.row()) << 32 ^ static_cast<std::uint64_t>(j)));
-          ++nnz;
+          k.hash = mix(k.hash ^ (static_cast<std::uint64_t>(it.row()) << 32 ^ static_cast<std::uint64_t>(j)));
+          ++k.nnz;
         }
-    return h;
+    return k;
   }
-  bool find(Index n, Index nnz, std::uint64_t hash, SupernodalOrdering asked, std::vector<int>& order,
-            SupernodalOrdering& used) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (auto it = items.begin(); it != items.end(); ++it)
-      if (it->n == n && it->nnz == nnz && it->hash == hash && it->asked == asked) {
-        items.splice(items.begin(), items, it);
-        order = it->order;
-        used = it->used;
-        ++hits;
-        return true;
-      }
-    return false;
+  // The ordering kept for `key` (and the one it is), if one is.
+  bool find(const Key& key, std::vector<int>& order, SupernodalOrdering& used) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = locate(key);
+    if (it == items_.end()) return false;
+    items_.splice(items_.begin(), items_, it);
+    order = it->order;
+    used = it->used;
+    ++hits_;
+    return true;
+  }
+  void insert(Item item) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = locate(item.key);
+    if (it != items_.end()) items_.erase(it);  // (another thread analysed the same pattern meanwhile)
+    items_.push_front(std::move(item));
+    if (items_.size() > kCapacity) items_.pop_back();
   }
   // Forgets every pattern (a benchmark of cold analyses clears it before each).
   void clear() {
-    std::lock_guard<std::mutex> lock(mutex);
-    items.clear();
+    std::lock_guard<std::mutex> lock(mutex_);
+    items_.clear();
   }
-  void insert(Item item) {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (auto it = items.begin(); it != items.end(); ++it)
-      if (it->n == item.n && it->nnz == item.nnz && it->hash == item.hash && it->asked == item.asked) {
-        items.erase(it);  // (another thread analysed the same pattern meanwhile)
-        break;
-      }
-    items.push_front(std::move(item));
-    if (items.size() > kCapacity) items.pop_back();
+  // (patterns kept, orderings taken from the cache so far)
+  std::pair<size_t, Index> counts() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return {items_.size(), hits_};
   }
+
+ private:
+  std::list<Item>::iterator locate(const Key& key) {
+    return std::find_if(items_.begin(), items_.end(), [&](const Item& i) { return i.key == key; });
+  }
+  std::mutex mutex_;
+  std::list<Item> items_;  // the most recently used first
+  Index hits_ = 0;
 };
 inline OrderingCache& ordering_cache() {
   static OrderingCache cache;
@@ -897,14 +911,15 @@ void SupernodalCholesky<LDLT>::analyze(const SparseMatrix& A) {
   // 1. Fill-reducing orderings: AMD on the pattern of A + A^T (as OrderedCholesky::analyze) and nested
   // dissection; the one whose factor needs fewer flops is kept (the counts cost O(nnz(A)) each; CHOLMOD
   // chooses between its orderings so).
-  std::vector<int> amd(N), nd;  // row of A -> its position
+  std::vector<int> amd, nd;  // row of A -> its position
   const bool cached = n >= kOrderingCacheFrom;
-  Index key_nnz = 0;
-  const std::uint64_t key = cached ? supernodal_detail::OrderingCache::hash_of(A, key_nnz) : 0;
+  supernodal_detail::OrderingCache::Key key;
+  if (cached) key = supernodal_detail::OrderingCache::key_of(A, ordering);
   std::vector<int> kept;
   SupernodalOrdering kept_used = SupernodalOrdering::amd;
-  ordering_reused_ = cached && supernodal_detail::ordering_cache().find(n, key_nnz, key, ordering, kept, kept_used);
+  ordering_reused_ = cached && supernodal_detail::ordering_cache().find(key, kept, kept_used);
   if (n > 0 && !ordering_reused_ && ordering != SupernodalOrdering::nested_dissection) {
+    amd.resize(N);
     SparseMatrix full(n, n);
     full = A.selfadjointView<Eigen::Lower>();
     Eigen::AMDOrdering<int> amd_ordering;
@@ -1094,7 +1109,7 @@ void SupernodalCholesky<LDLT>::analyze(const SparseMatrix& A) {
   }
   if (cached && !ordering_reused_) {
     supernodal_detail::OrderingCache::Item item;
-    item.n = n, item.nnz = key_nnz, item.hash = key, item.asked = ordering, item.used = used_;
+    item.key = key, item.used = used_;
     item.order = used_ == SupernodalOrdering::nested_dissection ? std::move(nd) : std::move(amd);
     supernodal_detail::ordering_cache().insert(std::move(item));
   }
