@@ -34,4 +34,32 @@ struct Entry {
   int row, col;
 };
 
+// Where the tangent's entries go as they are evaluated (tangent_add()): the values in the list of
+// tangent_entries() (K, C, advanced past the group's entries), and each also added into the iteration
+// matrix's storage at its position (tk[pk[e]], tc[pc[e]], pk and pc advanced alike).
+struct TangentOut {
+  double* K;
+  double* C;
+  const int* pk;
+  const int* pc;
+  double* tk;
+  double* tc;
+};
+// The next nk values of out.K and nc of out.C added at their positions, out advanced past them; the sum
+// of x - x over them.
+inline double add_listed(TangentOut& o, std::size_t nk, std::size_t nc) {
+  double nonfinite = 0.0;
+  auto add = [&nonfinite](double*& list, std::size_t m, const int*& pos, double* to) {
+    for (std::size_t e = 0; e < m; ++e) {
+      to[pos[e]] += list[e];
+      nonfinite += list[e] - list[e];
+    }
+    list += m;
+    pos += m;
+  };
+  add(o.K, nk, o.pk, o.tk);
+  add(o.C, nc, o.pc, o.tc);
+  return nonfinite;
+}
+
 }  // namespace nvib

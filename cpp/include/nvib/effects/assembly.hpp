@@ -65,6 +65,17 @@ class EffectsPlus {
     effects_.tangent_values(u, v, t, K, C);
     if constexpr (traits::has_sparse_tangent_method<Extra>::value) extra_.tangent_values(u, v, t, K + ke_, C + ce_);
   }
+  double tangent_add(const CVecRef& u, const CVecRef& v, double t, TangentOut& out, std::size_t nk,
+                     std::size_t nc) {
+    double nonfinite = effects_.tangent_add(u, v, t, out, ke_, ce_);
+    if constexpr (traits::has_sparse_tangent_method<Extra>::value) {
+      double *K = out.K, *C = out.C;
+      extra_.tangent_values(u, v, t, K, C);
+      nonfinite += add_listed(out, nk - ke_, nc - ce_);
+    }
+    (void)nk, (void)nc;
+    return nonfinite;
+  }
   static constexpr bool magnitude_evaluates_force = true;  // the extra force is evaluated again
   void magnitude(const CVecRef& u, const CVecRef& v, double t, VecRef out) {
     effects_.magnitude(u, v, t, out);

@@ -370,6 +370,7 @@ class CompiledEffects {
     }
     g.params = st.params.get();
     g.kernel = force_kernel<L>(g);
+    g.tangent = &tangent_add<L>;
     g.params_bytes = g.uniform ? 0 : sizeof(typename L::Params);
     g.state_width = law::state_width<L>();
     g.halo = halo_of(g);

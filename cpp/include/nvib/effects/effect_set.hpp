@@ -178,6 +178,16 @@ class EffectSet {
         kernels::tangent_values<decltype(L)>(g, u.data(), v.data(), t, K, C, committed_.data());
       });
   }
+  // tangent_values() with each value also added into an iteration matrix's storage (TangentOut);
+  // returns the sum of x - x over the values (0 unless one is not finite).
+  // (nk, nc: the numbers of entries, tangent_entries()'s; the kernels know their own.)
+  double tangent_add(const CVecRef& u, const CVecRef& v, double t, TangentOut& out, std::size_t nk,
+                     std::size_t nc) const {
+    (void)nk, (void)nc;
+    double nonfinite = 0.0;
+    for (const kernels::Group& g : c_->groups()) nonfinite += g.tangent(g, u.data(), v.data(), t, committed_.data(), out);
+    return nonfinite;
+  }
   // kd += the diagonal of the effects' tangent df/du at (u, v, t).
   void add_tangent_diagonal(const double* u, const double* v, double t, double* kd) const {
     for (const kernels::Group& g : c_->groups())

@@ -34,6 +34,10 @@ struct Group;
 using ForceKernel = void (*)(const Group&, const double* u, const double* v, double t, double* out,
                              const double* committed, double* trial);
 
+// The group's tangent into `out`; returns the sum of x - x over its values (0 unless one is not finite).
+using TangentKernel = double (*)(const Group&, const double* u, const double* v, double t, const double* committed,
+                                 TangentOut& out);
+
 struct Group {
   LawId law = 0;
   Storage storage = sparse;
@@ -54,6 +58,7 @@ struct Group {
   const void* params = nullptr;           // L::Params[size], or [1] if uniform
   std::size_t state = 0;                  // offset of the first effect's state in the state buffers
   ForceKernel kernel = nullptr;
+  TangentKernel tangent = nullptr;  // tangent_add<L>: set with kernel
   // dense_first: the loads' values f_k(t), and where the group's first sits among every dense load's
   void (*load_values)(const Group&, double t, double* f) = nullptr;
   // The same values into f, and the rows they add (add_dense_loads) over all DOFs, in one call.
@@ -513,6 +518,63 @@ void tangent_values(const Group& g, const double* u, const double* v, double t, 
     }
   }
   (void)g, (void)u, (void)v, (void)t, (void)K, (void)C, (void)committed;
+}
+
+// tangent_values() and the scatter of its values into the iteration matrix's storage in one pass: each
+// value goes to the list (out.K, out.C) and is added at its position (out.tk[*out.pk], ...), entry after
+// entry in the list's order, so that every place of the storage sums the same values in the same order as
+// a scatter of the finished list would (SparseIterationMatrix::assemble: the same bits).
+template <class L, Storage S>
+double two_entry_tangent_add(const Group& g, const double* u, const double* v, double t, const double* committed,
+                             TangentOut& o) {
+  double nonfinite = 0.0;
+  double *__restrict K = o.K, *__restrict C = o.C, *__restrict tk = o.tk, *__restrict tc = o.tc;
+  const int *__restrict pk = o.pk, *__restrict pc = o.pc;
+  for (std::size_t k = 0; k < g.size; ++k) {
+    double d, dd;
+    measures_of<L, S>(g, k, u, v, d, dd);
+    const Slopes s = law::slopes<L>(g.params_of<L>(k), g.state_of<L>(committed, k), d, dd, t);
+    const bool paired = S == pair || (S == mixed && g.j[k] >= 0);
+    auto put = [&](double* __restrict& list, const int* __restrict& pos, double* __restrict to, double x) {
+      nonfinite += x - x;  // (-x is finite where x is)
+      list[0] = x;
+      to[pos[0]] += x;
+      if (paired) {
+        list[1] = -x;
+        list[2] = -x;
+        list[3] = x;
+        to[pos[1]] += -x;
+        to[pos[2]] += -x;
+        to[pos[3]] += x;
+        list += 4;
+        pos += 4;
+      } else {
+        list += 1;
+        pos += 1;
+      }
+    };
+    if constexpr (L::uses_displacement) put(K, pk, tk, s.kd);
+    if constexpr (L::uses_velocity) put(C, pc, tc, s.kv);
+  }
+  o.K = K, o.C = C, o.pk = pk, o.pc = pc;
+  return nonfinite;
+}
+template <class L>
+double tangent_add(const Group& g, const double* u, const double* v, double t, const double* committed, TangentOut& o) {
+  if constexpr (L::is_load) {
+    (void)g, (void)u, (void)v, (void)t, (void)committed, (void)o;
+    return 0.0;
+  } else {
+    switch (g.storage) {
+      case ground: return two_entry_tangent_add<L, ground>(g, u, v, t, committed, o);
+      case pair: return two_entry_tangent_add<L, pair>(g, u, v, t, committed, o);
+      case mixed: return two_entry_tangent_add<L, mixed>(g, u, v, t, committed, o);
+      default: break;
+    }
+    double *K = o.K, *C = o.C;
+    tangent_values<L>(g, u, v, t, K, C, committed);
+    return add_listed(o, static_cast<std::size_t>(K - o.K), static_cast<std::size_t>(C - o.C));
+  }
 }
 
 // kd_r += df/dd g_r g_r for every effect and every entry r of its measure (the diagonal entries of

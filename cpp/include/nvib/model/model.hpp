@@ -82,6 +82,14 @@ struct has_sparse_tangent_method<
                                                               std::declval<const CVecRef&>(), 0.0,
                                                               std::declval<double*>(), std::declval<double*>()))>>
     : std::true_type {};
+// ... and that adds them into an iteration matrix's storage as it evaluates them (EffectSet).
+template <class F, class = void>
+struct has_tangent_add_method : std::false_type {};
+template <class F>
+struct has_tangent_add_method<
+    F, std::void_t<decltype(std::declval<F&>().tangent_add(std::declval<const CVecRef&>(), std::declval<const CVecRef&>(),
+                                                           0.0, std::declval<TangentOut&>(),
+                                                           std::size_t(0), std::size_t(0)))>> : std::true_type {};
 // A force with the entry-by-entry tangent may still switch it off at run time.
 NVIB_OPTIONAL_FLAG(has_sparse_tangent, has_sparse_tangent_method<F>::value)
 #undef NVIB_OPTIONAL_FLAG
@@ -453,6 +461,19 @@ class Model {
   void tangent_values(const CVecRef& u, const CVecRef& v, double t, double* K, double* C, Stats& st) {
     ++st.num_tangent_evals;
     if constexpr (traits::has_sparse_tangent_method<Force>::value) f_.tangent_values(u, v, t, K, C);
+  }
+  // The same values into out.K and out.C (nk and nc of them), each also added into an iteration matrix's
+  // storage at its position (TangentOut): in one pass where the force can, else listed
+  // and then added. Returns the sum of x - x over the values (0 unless one is not finite).
+  double tangent_add(const CVecRef& u, const CVecRef& v, double t, TangentOut out, std::size_t nk,
+                     std::size_t nc, Stats& st) {
+    ++st.num_tangent_evals;
+    if constexpr (traits::has_tangent_add_method<Force>::value) {
+      return f_.tangent_add(u, v, t, out, nk, nc);
+    } else {
+      if constexpr (traits::has_sparse_tangent_method<Force>::value) f_.tangent_values(u, v, t, out.K, out.C);
+      return add_listed(out, nk, nc);
+    }
   }
 
  private:

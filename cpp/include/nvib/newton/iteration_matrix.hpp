@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "../base/interrupt.hpp"
@@ -141,19 +142,33 @@ class SparseIterationMatrix {
   template <class ModelT>
   bool assemble(ModelT& model, const IterationMatrix& im, Stats& st) {
     if (!ready_) setup(model);
-    model.tangent_values(*im.u, *im.v, im.t, kvals_.data(), cvals_.data(), st);
     if (!have_base_) linear_parts(model);
-    const size_t m = static_cast<size_t>(num_values());
+    const size_t m = static_cast<size_t>(num_read());
     std::fill(tk_.begin(), tk_.end(), 0.0);
+    if (velocity_) std::fill(tc_.begin(), tc_.end(), 0.0);
+    // The tangent's values, each added into K_t's (and C_t's) place in S's storage as it is evaluated.
     // x - x is 0 for a finite x and NaN otherwise: one sum tells whether every entry is finite.
-    double finite = scatter(posNK_, kvals_.data(), tk_.data());
+    const double finite = model.tangent_add(*im.u, *im.v, im.t,
+                                            TangentOut{kvals_.data(), cvals_.data(), posNK_.data(), posNC_.data(),
+                                                       tk_.data(), velocity_ ? tc_.data() : nullptr},
+                                            kvals_.size(), cvals_.size(), st);
     const double cK = im.cK, cM = im.cM, cC = im.cC;
     double* __restrict s = values();
-    const double *__restrict tk = tk_.data(), *__restrict kl = klin_.data(), *__restrict ml = mlin_.data();
-    for (size_t q = 0; q < m; ++q) s[q] = cK * (tk[q] + kl[q]) + cM * ml[q];
+    const double *__restrict tk = tk_.data(), *__restrict kl = klin_.data();
+    // c_M M is kept while c_M does not change (a run of one step length); the same products.
+    if (!(cM == mterm_c_)) {
+      const double* __restrict ml = mlin_.data();
+      double* __restrict mt = mterm_.data();
+      for (size_t q = 0; q < m; ++q) mt[q] = cM * ml[q];
+      mterm_c_ = cM;
+    }
+    const double* __restrict mt = mterm_.data();
+    // Without a linear K, tk + 0 is tk (up to the sign of a zero, which the sum with c_M M then drops).
+    if (has_klin_)
+      for (size_t q = 0; q < m; ++q) s[q] = cK * (tk[q] + kl[q]) + mt[q];
+    else
+      for (size_t q = 0; q < m; ++q) s[q] = cK * tk[q] + mt[q];
     if (velocity_) {
-      std::fill(tc_.begin(), tc_.end(), 0.0);
-      finite += scatter(posNC_, cvals_.data(), tc_.data());
       const double *__restrict tc = tc_.data(), *__restrict cl = clin_.data();
       for (size_t q = 0; q < m; ++q) s[q] += cC * (tc[q] + cl[q]);
       double* c = Ct_.valuePtr();  // C_t alone (the incremental format's C_t (v1 - v_n))
@@ -195,6 +210,9 @@ class SparseIterationMatrix {
   double* values() { return retargeted_ ? target_.data() : S_.valuePtr(); }
   const double* values() const { return retargeted_ ? target_.data() : S_.valuePtr(); }
   Index num_values() const { return retargeted_ ? static_cast<Index>(target_.size()) : static_cast<Index>(S_.nonZeros()); }
+  // The first num_read() of them are the ones read (the rest: retarget()'s places of their own for what
+  // the factorisation does not read, never formed into S).
+  Index num_read() const { return retargeted_ ? read_ : static_cast<Index>(S_.nonZeros()); }
   // From now on S is assembled into a storage of `size` values, the k-th stored value of matrix() going
   // to to[k] (to[k] < 0: not read by that factorisation, such as the upper triangle of a symmetric S):
   // one pass fewer than assembling the compressed columns and copying them over. matrix() keeps its
@@ -211,6 +229,7 @@ class SparseIterationMatrix {
     remap(posNK_);
     remap(posNC_);
     target_.assign(static_cast<size_t>(spare), 0.0);
+    read_ = size;
     retargeted_ = true;
     have_base_ = false;
   }
@@ -270,6 +289,9 @@ class SparseIterationMatrix {
     klin_.assign(m, 0.0);
     scatter(posM_, mvals_.data(), mlin_.data());
     add_values(model.K(), posK_, klin_.data());
+    has_klin_ = std::any_of(klin_.begin(), klin_.end(), [](double x) { return x != 0.0; });
+    mterm_.assign(m, 0.0);
+    mterm_c_ = std::numeric_limits<double>::quiet_NaN();
     tk_.assign(m, 0.0);
     if (velocity_) {
       clin_.assign(m, 0.0);
@@ -306,6 +328,10 @@ class SparseIterationMatrix {
   std::vector<double> target_;  // S in a factorisation's own layout (retarget())
   std::vector<double> mlin_, klin_, clin_;  // M and the linear K and C in S's storage (values())
   std::vector<double> tk_, tc_;             // K_t and C_t being summed, in S's storage
+  std::vector<double> mterm_;               // c_M M in S's storage, for c_M = mterm_c_
+  double mterm_c_ = 0.0;
+  bool has_klin_ = false;                   // a linear K with a nonzero entry
+  Index read_ = 0;                          // retarget()'s size
   bool have_base_ = false;
   const SparseMatrix* K_ = nullptr;
   std::vector<Entry> kent_, cent_;
