@@ -107,6 +107,41 @@ def test_the_automatic_choice_is_stated():
             nvib.solve(callable_model, nvib.Newmark(newton=nvib.Newton(linear_solver=choice)), dt=1e-3, t_end=0.01)
 
 
+def test_the_symmetry_of_K_and_C_is_read_entry_by_entry():
+    # S is factorised symmetrically (LDL^T) only where K and C equal their transposes to 1e-14 of their
+    # largest entry, an entry without a stored twin counting as one against 0. A chain with a long-range
+    # pair (0, 7): mirrored, mirrored up to 1e-15 or up to 1e-9 of it, one-sided (a zero twin given
+    # explicitly, or none), or zero both ways. (100 DOFs: above the dense LU's sizes, and no band.)
+    n = 100
+    rows = list(range(n)) + list(range(1, n)) + list(range(n - 1))
+    cols = list(range(n)) + list(range(n - 1)) + list(range(1, n))
+    vals = [2e3] * n + [-1e3] * (2 * n - 2)
+
+    def solver(k07, k70, where, twin_stored=True):
+        r, c, x = rows + [0], cols + [7], vals + [k07]
+        if twin_stored:
+            r, c, x = r + [7], c + [0], x + [k70]
+        A = sparse.csc_matrix((x, (r, c)), shape=(n, n))
+        assert A.nnz == 3 * n - 2 + 1 + twin_stored  # explicit zeros kept
+        chain = sparse.csc_matrix((vals, (rows, cols)), shape=(n, n))
+        parts = {"K": A} if where == "K" else {"K": chain, "C": A * 1e-3}
+        model = nvib.Model(np.ones(n), **parts, effects=[{"type": "hardening_spring", "i": [3], "k0": 1e3, "a": 1.0}])
+        return nvib.solve(model, nvib.Newmark(), dt=1e-3, t_end=0.002, u0=np.full(n, 1e-3)).stats.linear_solver
+
+    def symmetric(where, *args, **kw):  # LDL^T, or LU where S is not symmetric (with the low-rank update or not)
+        name = solver(*args, where, **kw)
+        assert name.split(" + ")[0] in ("sparse LDLT", "supernodal LDLT", "banded LDLT", "sparse LU"), name
+        return "LDLT" in name
+
+    for where in ("K", "C"):
+        assert symmetric(where, 5.0, 5.0)
+        assert symmetric(where, 5.0, 5.0 * (1 + 1e-15))
+        assert not symmetric(where, 5.0, 5.0 * (1 + 1e-9))
+        assert not symmetric(where, 5.0, 0.0)
+        assert not symmetric(where, 5.0, None, twin_stored=False)
+        assert symmetric(where, 0.0, 0.0)  # (zeros dropped: the chain alone, banded)
+
+
 def test_a_band_pivot_that_needs_an_exchange_goes_to_the_sparse_lu():
     # S = 16 M + K (Newmark at dt = 0.5 s, exact in binary) with S[0, 0] = 16 - 1016 + 1000 = 0: LDL^T without
     # pivoting meets a zero pivot on a regular S; the LU with pivoting solves it, as the dense LU does

@@ -96,38 +96,41 @@ class SparseIterationMatrix {
     if (!velocity_) cent_.clear();
     kvals_.assign(kent_.size(), 0.0);
     cvals_.assign(cent_.size(), 0.0);
-    // The pattern of S: every contribution, with a zero value (duplicates merge).
-    std::vector<Eigen::Triplet<double, int>> all;
-    model.mass().for_each_entry([&](Index i, Index j, double) { all.emplace_back(int(i), int(j), 0.0); });
-    add_pattern(model.K(), all);
-    if (velocity_) add_pattern(model.C(), all);
-    for (const Entry& e : kent_) all.emplace_back(e.row, e.col, 0.0);
-    for (const Entry& e : cent_) all.emplace_back(e.row, e.col, 0.0);
-    S_.resize(n, n);
-    S_.setFromTriplets(all.begin(), all.end());
-    S_.makeCompressed();
-    all.clear();
-    all.shrink_to_fit();
-    // Where each contribution goes.
-    posM_.clear();
+    // The mass's entries, in its column order, as compressed columns.
+    std::vector<int> mptr(static_cast<size_t>(n) + 1, 0), mrows;
     mvals_.clear();
     model.mass().for_each_entry([&](Index i, Index j, double m) {
-      posM_.push_back(position(S_, int(i), int(j)));
+      ++mptr[static_cast<size_t>(j) + 1];
+      mrows.push_back(static_cast<int>(i));
       mvals_.push_back(m);
     });
-    positions_of(model.K(), S_, posK_);
-    if (velocity_) positions_of(model.C(), S_, posC_);
-    positions_of(kent_, S_, posNK_);
-    positions_of(cent_, S_, posNC_);
+    for (size_t j = 0; j < static_cast<size_t>(n); ++j) mptr[j + 1] += mptr[j];
+    // The pattern of S: every contribution (duplicates merge), and where each goes.
+    // (K and C are 0 x 0 where the model has none.)
+    std::vector<Columns> columns{Columns{mptr.data(), mrows.data()}};
+    std::vector<std::vector<int>*> column_pos{&posM_};
+    posK_.clear();
+    posC_.clear();
+    posCtC_.clear();
+    const bool has_K = model.K().outerSize() == n, has_C = velocity_ && model.C().outerSize() == n;
+    if (has_K) {
+      columns.push_back(Columns::of(model.K()));
+      column_pos.push_back(&posK_);
+    }
+    if (has_C) {
+      columns.push_back(Columns::of(model.C()));
+      column_pos.push_back(&posC_);
+    }
+    union_pattern(n, columns, column_pos, {&kent_, &cent_}, {&posNK_, &posNC_}, S_);
     // C_t alone, for the incremental format's C_t (v1 - v_n).
     if (velocity_) {
-      Ct_.resize(n, n);
-      for (const Entry& e : cent_) all.emplace_back(e.row, e.col, 0.0);
-      add_pattern(model.C(), all);
-      Ct_.setFromTriplets(all.begin(), all.end());
-      Ct_.makeCompressed();
-      positions_of(model.C(), Ct_, posCtC_);
-      positions_of(cent_, Ct_, posCtN_);
+      columns.clear();
+      column_pos.clear();
+      if (has_C) {
+        columns.push_back(Columns::of(model.C()));
+        column_pos.push_back(&posCtC_);
+      }
+      union_pattern(n, columns, column_pos, {&cent_}, {&posCtN_}, Ct_);
     }
     poll_interrupt();
     symmetric_ = is_symmetric(model.K()) && (!velocity_ || is_symmetric(model.C()));
@@ -260,25 +263,72 @@ class SparseIterationMatrix {
   }
 
  private:
-  static void add_pattern(const SparseMatrix& A, std::vector<Eigen::Triplet<double, int>>& out) {
-    for (Index j = 0; j < A.outerSize(); ++j)
-      for (SparseMatrix::InnerIterator it(A, j); it; ++it) out.emplace_back(it.row(), int(j), 0.0);
-  }
-  // The index in A's values of entry (i, j), which the pattern holds.
-  static int position(const SparseMatrix& A, int i, int j) {
-    const int* rows = A.innerIndexPtr();
-    const int *b = rows + A.outerIndexPtr()[j], *e = rows + A.outerIndexPtr()[j + 1];
-    return static_cast<int>(std::lower_bound(b, e, i) - rows);
-  }
-  static void positions_of(const SparseMatrix& A, const SparseMatrix& S, std::vector<int>& pos) {
-    pos.clear();
-    for (Index j = 0; j < A.outerSize(); ++j)
-      for (SparseMatrix::InnerIterator it(A, j); it; ++it) pos.push_back(position(S, it.row(), int(j)));
-  }
-  static void positions_of(const std::vector<Entry>& entries, const SparseMatrix& S, std::vector<int>& pos) {
-    pos.clear();
-    pos.reserve(entries.size());
-    for (const Entry& e : entries) pos.push_back(position(S, e.row, e.col));
+  // Entries given by compressed columns (the rows of column j at row[ptr[j]] .. row[ptr[j + 1] - 1]).
+  struct Columns {
+    const int* ptr;
+    const int* row;
+    static Columns of(const SparseMatrix& A) { return {A.outerIndexPtr(), A.innerIndexPtr()}; }
+  };
+  // out = the pattern of every source, compressed columns with ascending rows (zero values), and for each
+  // source entry its index in out's values (column sources in their storage order, entry lists in
+  // theirs). Column by column with a marker per row: no sort of all the entries and no search, a sort of
+  // each column's few rows.
+  static void union_pattern(Index n, const std::vector<Columns>& columns, const std::vector<std::vector<int>*>& column_pos,
+                            const std::vector<const std::vector<Entry>*>& lists,
+                            const std::vector<std::vector<int>*>& list_pos, SparseMatrix& out) {
+    const size_t N = static_cast<size_t>(n);
+    // The lists' entries by column (a counting sort of their rows, each with where its position goes).
+    std::vector<int> lptr(N + 1, 0);
+    for (const auto* l : lists)
+      for (const Entry& e : *l) ++lptr[static_cast<size_t>(e.col) + 1];
+    for (size_t j = 0; j < N; ++j) lptr[j + 1] += lptr[j];
+    std::vector<int> lrow(static_cast<size_t>(lptr[N]));
+    std::vector<int*> lto(static_cast<size_t>(lptr[N]));
+    {
+      std::vector<int> next(lptr.begin(), lptr.end() - 1);
+      for (size_t l = 0; l < lists.size(); ++l) {
+        list_pos[l]->assign(lists[l]->size(), 0);
+        for (size_t k = 0; k < lists[l]->size(); ++k) {
+          const Entry& e = (*lists[l])[k];
+          const size_t q = static_cast<size_t>(next[static_cast<size_t>(e.col)]++);
+          lrow[q] = e.row;
+          lto[q] = list_pos[l]->data() + k;
+        }
+      }
+    }
+    size_t total = lrow.size();
+    for (size_t c = 0; c < columns.size(); ++c) {
+      total += static_cast<size_t>(columns[c].ptr[N]);
+      column_pos[c]->assign(static_cast<size_t>(columns[c].ptr[N]), 0);
+    }
+    std::vector<int> outer(N + 1, 0), inner, mark(N, -1), where(N, 0);
+    inner.reserve(total);
+    for (size_t j = 0; j < N; ++j) {
+      const size_t first = inner.size();
+      const int jj = static_cast<int>(j);
+      auto add = [&](int r) {
+        if (mark[static_cast<size_t>(r)] != jj) {
+          mark[static_cast<size_t>(r)] = jj;
+          inner.push_back(r);
+        }
+      };
+      for (const Columns& c : columns)
+        for (int q = c.ptr[j]; q < c.ptr[j + 1]; ++q) add(c.row[q]);
+      for (int q = lptr[j]; q < lptr[j + 1]; ++q) add(lrow[static_cast<size_t>(q)]);
+      std::sort(inner.begin() + static_cast<std::ptrdiff_t>(first), inner.end());
+      for (size_t q = first; q < inner.size(); ++q) where[static_cast<size_t>(inner[q])] = static_cast<int>(q);
+      for (size_t c = 0; c < columns.size(); ++c) {
+        int* pos = column_pos[c]->data();
+        for (int q = columns[c].ptr[j]; q < columns[c].ptr[j + 1]; ++q) pos[q] = where[static_cast<size_t>(columns[c].row[q])];
+      }
+      for (int q = lptr[j]; q < lptr[j + 1]; ++q) *lto[static_cast<size_t>(q)] = where[static_cast<size_t>(lrow[static_cast<size_t>(q)])];
+      outer[j + 1] = static_cast<int>(inner.size());
+    }
+    out.resize(n, n);
+    out.resizeNonZeros(static_cast<Index>(inner.size()));
+    std::copy(outer.begin(), outer.end(), out.outerIndexPtr());
+    std::copy(inner.begin(), inner.end(), out.innerIndexPtr());
+    std::fill_n(out.valuePtr(), inner.size(), 0.0);
   }
   // The mass and the linear K and C in S's storage (0 where they have no entry), and the work arrays
   // of K_t and C_t.
@@ -314,13 +364,27 @@ class SparseIterationMatrix {
   static void add_values(const SparseMatrix& A, const std::vector<int>& pos, double* s) {
     scatter(pos, A.valuePtr(), s);
   }
+  // A = A^T to 1e-14 of its largest entry (an entry without a stored twin against 0), entry by entry, in
+  // one pass (no transposed copy, no difference matrix): the columns are walked in order, so the twins
+  // sought in column i come in ascending rows and a cursor per column finds each.
   static bool is_symmetric(const SparseMatrix& A) {
     if (A.nonZeros() == 0) return true;
-    const SparseMatrix D = SparseMatrix(A.transpose()) - A;
-    double dmax = 0.0, amax = 0.0;
-    for (Index k = 0; k < D.nonZeros(); ++k) dmax = std::max(dmax, std::abs(D.valuePtr()[k]));
-    for (Index k = 0; k < A.nonZeros(); ++k) amax = std::max(amax, std::abs(A.valuePtr()[k]));
-    return dmax <= 1e-14 * amax;
+    const int *ptr = A.outerIndexPtr(), *row = A.innerIndexPtr();
+    const double* x = A.valuePtr();
+    double amax = 0.0;
+    for (Index k = 0; k < A.nonZeros(); ++k) amax = std::max(amax, std::abs(x[k]));
+    const double tol = 1e-14 * amax;
+    std::vector<int> cursor(ptr, ptr + A.outerSize());
+    for (int j = 0; j < static_cast<int>(A.outerSize()); ++j)
+      for (int q = ptr[j]; q < ptr[j + 1]; ++q) {
+        const int i = row[q];
+        if (i == j) continue;
+        int& c = cursor[static_cast<size_t>(i)];
+        while (c < ptr[i + 1] && row[c] < j) ++c;
+        const double twin = c < ptr[i + 1] && row[c] == j ? x[c] : 0.0;
+        if (!(std::abs(x[q] - twin) <= tol)) return false;
+      }
+    return true;
   }
 
   bool ready_ = false, velocity_ = false, symmetric_ = true, retargeted_ = false;
