@@ -65,7 +65,7 @@ class NewtonSolver {
   Status solve(Problem& p, ModelT& model, Vector& x, double t, std::int64_t step, Stats& st) {
     residuals_.clear();
     accepted_ = std::numeric_limits<double>::quiet_NaN();
-    failure_ = Failure{};
+    if (failure_.status != Status::success) failure_ = Failure{};  // (only fail() sets it, status first)
     p.predict(x);
     p.update(x);
     const bool linear = p.linear();

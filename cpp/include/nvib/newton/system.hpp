@@ -82,11 +82,12 @@ class IterationSystem {
     }
     if (!sparse_S_.assemble(model, im, st)) return have_last_ = false;
     const double* values = sparse_S_.values();
-    const Index count = sparse_S_.num_values();
+    const Index count = sparse_S_.num_read();  // (the places the factorisation reads)
     st.linear_solver = name();
     if (have_last_ && same_values(values, last_.data(), count)) return reused_ = true, last_ok_;
     if (kind_ == Kind::banded) {
       // A pivot the band cannot take without pivoting: this S goes to the sparse LU (with pivoting).
+      const bool failed_before = band_failed_;
       band_failed_ = !banded_.factorize(values);
       last_ok_ = !band_failed_;
       if (band_failed_) {
@@ -96,10 +97,11 @@ class IterationSystem {
         lu_ready_ = true;
         last_ok_ = sparse_lu_.factorize(S);
       }
+      if (band_failed_ || failed_before) st.linear_solver = name();  // (the name above was the band's)
     } else {
       last_ok_ = sparse_lu_.factorize(sparse_S_.matrix());
+      st.linear_solver = name();  // (the sparse LU's name says which factorisation it took)
     }
-    st.linear_solver = name();
     last_.resize(count, 1);
     std::copy(values, values + count, last_.data());
     have_last_ = true;
