@@ -44,7 +44,16 @@ class EffectSet {
       : c_(std::make_shared<const CompiledEffects>(std::move(list), mass, linear, std::move(arrays))),
         committed_(c_->initial_state()),
         trial_(c_->initial_state()),
-        load_f_(c_->num_dense_loads(), 0.0) {}
+        load_f_(c_->num_dense_loads(), 0.0) {
+    // One dense load whose row has one value everywhere and no constant load under it (a ground motion
+    // on a uniform mass): at a time already evaluated, every entry is that value times the kept f.
+    const auto& groups = c_->groups();
+    if (c_->num_load_groups() == 1) {
+      const kernels::Group& g = groups.front();
+      one_value_load_ = g.size == 1 && g.writes && g.constant_load == nullptr && g.row_value != nullptr &&
+                        !std::isnan(g.row_value[0]);
+    }
+  }
 
   const std::vector<Effect>& effects() const { return c_->effects(); }
   const std::vector<EffectArray>& arrays() const { return c_->arrays(); }
@@ -87,6 +96,9 @@ class EffectSet {
       if (!(t == load_t_)) {
         g.load_write(g, t, f, op);
         load_t_ = t;
+      } else if (one_value_load_) {  // add_dense_loads' product, inline (a Newton iteration's force)
+        const double x = g.row_value[0] * f[0];
+        detail::for_each_index(g.n, [=](Index q) { op[q] = x; });
       } else {
         kernels::add_dense_loads(g, f, op);
       }
@@ -497,6 +509,7 @@ class EffectSet {
   mutable std::vector<double> trial_;  // written by every force evaluation (a pure trial)
   mutable std::vector<double> load_f_;  // the dense loads' values at load_t_ (a pure function of t)
   mutable double load_t_ = std::numeric_limits<double>::quiet_NaN();
+  bool one_value_load_ = false;  // see the constructor
   bool verify_ = false;
   double opaque_zero_ = 0.0;  // see eval()
 };

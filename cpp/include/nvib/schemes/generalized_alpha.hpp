@@ -230,11 +230,17 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
     // (Newmark, af = 0: the end of the step itself; the velocity only where forces use it)
     ua_at_ = &u1_;
     va_at_ = &v1_;
-    if (af != 0.0) {
-      ua_ = (1.0 - af) * u1_ + af * u_;
+    if (af != 0.0) {  // (the products and sum of the vector expression, entry by entry)
+      const double cn = 1.0 - af;
+      auto blend = [&](const Vector& x1, const Vector& x0, Vector& out) {
+        const double *a = x1.data(), *b = x0.data();
+        double* o = out.data();
+        detail::for_each_index(x1.size(), [=](Index i) { o[i] = cn * a[i] + af * b[i]; });
+      };
+      blend(u1_, u_, ua_);
       ua_at_ = &ua_;
       if (model_.uses_velocity()) {
-        va_ = (1.0 - af) * v1_ + af * v_;
+        blend(v1_, v_, va_);
         va_at_ = &va_;
       }
     }
