@@ -98,7 +98,7 @@ class EffectSet {
         load_t_ = t;
       } else if (one_value_load_) {  // add_dense_loads' product, inline (a Newton iteration's force)
         const double x = g.row_value[0] * f[0];
-        detail::for_each_index(g.n, [=](Index q) { op[q] = x; });
+        for (Index q = 0, n = g.n; q < n; ++q) op[q] = x;  // (a plain loop keeps eval() small enough to inline)
       } else {
         kernels::add_dense_loads(g, f, op);
       }
