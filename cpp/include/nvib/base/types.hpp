@@ -45,20 +45,22 @@ struct TangentOut {
   double* tk;
   double* tc;
 };
+// s[pos[k]] += x[k] for k = 0 .. m - 1, in order; returns the sum of x[k] - x[k] (0 unless some x[k] is
+// not finite).
+inline double scatter_add(const int* __restrict pos, const double* __restrict x, std::size_t m, double* __restrict s) {
+  double nonfinite = 0.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    s[pos[k]] += x[k];
+    nonfinite += x[k] - x[k];
+  }
+  return nonfinite;
+}
 // The next nk values of out.K and nc of out.C added at their positions, out advanced past them; the sum
 // of x - x over them.
 inline double add_listed(TangentOut& o, std::size_t nk, std::size_t nc) {
-  double nonfinite = 0.0;
-  auto add = [&nonfinite](double*& list, std::size_t m, const int*& pos, double* to) {
-    for (std::size_t e = 0; e < m; ++e) {
-      to[pos[e]] += list[e];
-      nonfinite += list[e] - list[e];
-    }
-    list += m;
-    pos += m;
-  };
-  add(o.K, nk, o.pk, o.tk);
-  add(o.C, nc, o.pc, o.tc);
+  const double nonfinite = scatter_add(o.pk, o.K, nk, o.tk) + scatter_add(o.pc, o.C, nc, o.tc);
+  o.K += nk, o.pk += nk;
+  o.C += nc, o.pc += nc;
   return nonfinite;
 }
 

@@ -350,17 +350,11 @@ class SparseIterationMatrix {
     }
     have_base_ = true;
   }
-  // s[pos[k]] += x[k] for every k, in order; returns the sum of x[k] - x[k] (0 unless some x[k] is not finite).
-  static double scatter(const std::vector<int>& pos, const double* __restrict x, double* __restrict s) {
-    const int* __restrict p = pos.data();
-    double nonfinite = 0.0;
-    for (size_t k = 0, m = pos.size(); k < m; ++k) {
-      s[p[k]] += x[k];
-      nonfinite += x[k] - x[k];
-    }
-    return nonfinite;
+  // scatter_add() over a list of places.
+  static double scatter(const std::vector<int>& pos, const double* x, double* s) {
+    return scatter_add(pos.data(), x, pos.size(), s);
   }
-  // S[pos[k]] += A.values[k] (A's values in its storage order, which positions_of followed).
+  // S[pos[k]] += A.values[k] (A's values in its storage order, which union_pattern() followed).
   static void add_values(const SparseMatrix& A, const std::vector<int>& pos, double* s) {
     scatter(pos, A.valuePtr(), s);
   }

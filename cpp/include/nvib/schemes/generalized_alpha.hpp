@@ -251,23 +251,29 @@ class GeneralizedAlphaStepper : public StepperBase<ModelT> {
       double* rp = r.data();
       double rn = 0.0, scale = 0.0;
       bool nan = false;
-      if (am == 0.0) {  // (Newmark) no inertia of a_n: the same sums without their term 0
+      // With alpha_m = 0 (Newmark) the inertia of a_n is 0 and left out of the sums.
+      auto pass = [&](auto with_old) {
+        constexpr bool Old = decltype(with_old)::value;
+        const double cn = Old ? 1.0 - am : 1.0;
         detail::for_each_index(r.size(), [&](Index i) {
-          const double inertia_new = m[i] * a1[i];
-          rp[i] = inertia_new + g[i];
+          const double inertia_new = cn * m[i] * a1[i];
+          double others = std::abs(g[i]);
+          if constexpr (Old) {
+            const double inertia_old = am * m[i] * a0[i];
+            rp[i] = inertia_new + inertia_old + g[i];
+            others = std::max(std::abs(inertia_old), others);
+          } else {
+            rp[i] = inertia_new + g[i];
+          }
           rn = std::max(rn, std::abs(rp[i]));
-          scale = std::max(scale, std::max(std::abs(inertia_new), std::abs(g[i])));
+          scale = std::max(scale, std::max(std::abs(inertia_new), others));
           nan = nan || std::isnan(rp[i]);  // max() would drop a NaN
         });
-      } else {
-        detail::for_each_index(r.size(), [&](Index i) {
-          const double inertia_new = (1.0 - am) * m[i] * a1[i], inertia_old = am * m[i] * a0[i];
-          rp[i] = inertia_new + inertia_old + g[i];
-          rn = std::max(rn, std::abs(rp[i]));
-          scale = std::max(scale, std::max(std::abs(inertia_new), std::max(std::abs(inertia_old), std::abs(g[i]))));
-          nan = nan || std::isnan(rp[i]);
-        });
-      }
+      };
+      if (am == 0.0)
+        pass(std::false_type{});
+      else
+        pass(std::true_type{});
       return {nan ? std::numeric_limits<double>::quiet_NaN() : rn, scale};
     }
     model_.mass().apply(a1_, r);
