@@ -132,6 +132,69 @@ void linear_product_cases() {
     if (n >= 4) check(band_matrix(n, 3, gen), SparseMatrix(n, n), false);  // wider than 2
   }
   std::printf("LinearProduct: %d band cases and %d general ones, bit for bit with the rows\n", banded, general);
+  // Bands whose diagonals hold one value over a run of rows (uniform storeys): those rows multiply by
+  // constants, the same products in the same order. The run is the longest around the middle row, of
+  // interior rows only; a row that differs (another storey, or a value of another sign of zero) ends it.
+  int runs = 0;
+  for (Index n : {60, 70, 200, 1001}) {
+    Vector u(n), v(n), out0(n);
+    for (Index i = 0; i < n; ++i) u[i] = normal(gen), v[i] = normal(gen), out0[i] = normal(gen);
+    // A band of half-width B with diagonal o's value d[o + B] in every row, row `odd` (if >= 0)
+    // changed to `odd_value` on its diagonal, and the last row's diagonal another (a chain's top).
+    auto uniform_band = [&](int B, std::vector<double> d, Index odd, double odd_value) {
+      std::vector<Eigen::Triplet<double, int>> t;
+      for (Index i = 0; i < n; ++i)
+        for (Index j = std::max<Index>(0, i - B); j <= std::min<Index>(n - 1, i + B); ++j) {
+          double x = d[static_cast<size_t>(j - i + B)];
+          if (i == j && i == odd) x = odd_value;
+          if (i == j && i == n - 1) x += 1.0;
+          t.emplace_back(static_cast<int>(i), static_cast<int>(j), x);
+        }
+      SparseMatrix A(n, n);
+      A.setFromTriplets(t.begin(), t.end());
+      return A;
+    };
+    for (int bk = -1; bk <= 2; ++bk)
+      for (int bc = -1; bc <= 2; ++bc) {
+        if (bk < 0 && bc < 0) continue;
+        const int B = std::max({bk, bc, 0});
+        for (Index odd : {Index(-1), n / 2 + 3, n / 3}) {
+          for (double odd_value : {7.5, -0.0}) {
+            std::vector<double> dk(static_cast<size_t>(2 * std::max(bk, 0) + 1)), dc(static_cast<size_t>(2 * std::max(bc, 0) + 1));
+            for (double& x : dk) x = normal(gen);
+            for (double& x : dc) x = normal(gen);
+            if (bc >= 0) dc[static_cast<size_t>(bc)] = 0.0;  // a diagonal of +0.0: -0.0 differs from it
+            const SparseMatrix K = bk < 0 ? SparseMatrix(n, n) : uniform_band(bk, dk, -1, 0.0);
+            const SparseMatrix C = bc < 0 ? SparseMatrix(n, n) : uniform_band(bc, dc, odd, odd_value);
+            const nvib::LinearProduct p(K, C);
+            CHECK(p.banded());
+            // The expected run: interior rows B .. n - B - 1 less the top row (its other diagonal) and,
+            // where C's changed row lies at or above the middle row, the rows from it on.
+            const Index lo = B, hi = n - B, mid = lo + (hi - lo) / 2;
+            Index a = lo, z = std::min(hi, n - 1);
+            if (bc >= 0 && odd >= 0) {
+              if (odd > mid)
+                z = std::min(z, odd);
+              else
+                a = std::max(a, odd + 1);
+            }
+            const bool run = z - a >= nvib::LinearProduct::kConstantRows;
+            CHECK(p.constant_rows() == (run ? std::make_pair(a, z) : std::make_pair(Index(0), Index(0))));
+            runs += run;
+            const Vector ref = rows_reference(K, C, u, v, out0);
+            Vector out = out0;
+            p.add(u.data(), v.data(), out.data());
+            CHECK(bitwise_equal(out, ref));
+            // in pieces, as the streamed step asks for rows (pieces across the run's ends)
+            out = out0;
+            for (Index r0 = 0; r0 < n; r0 += 37) p.add(u.data(), v.data(), out.data(), r0, std::min(n, r0 + 37));
+            CHECK(bitwise_equal(out, ref));
+          }
+        }
+      }
+  }
+  std::printf("LinearProduct: %d bands with a run of constant rows, bit for bit with the rows\n", runs);
+  CHECK(runs > 0);
 }
 
 // A symmetric FE-like pattern: K_ii = 4 + |row|, K_ij = -1 for a few random j within +-12 of i (a

@@ -7,6 +7,7 @@
 // streamed step measures against the loop's own.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -197,6 +198,34 @@ int main() {
       if (j[k] >= 0) ref[j[k]] -= force;
     }
     CHECK(f == ref);
+  }
+  // The loop's divergence test (displacement_ok) against its definition, entry by entry: every |u_i| <=
+  // bound and finite; on sizes unrolled, looped and across its blocks, with the offending entry first,
+  // in the middle and last.
+  {
+    int cases = 0;
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    for (Index m : {1, 2, 5, 8, 9, 100, 1023, 1024, 1025, 3001}) {
+      Vector u(m);
+      for (Index k = 0; k < m; ++k) u[k] = 0.5 * std::sin(1.3 * double(k));
+      for (double bound : {inf, 2.0, 0.5}) {
+        auto reference = [&](const Vector& x) {
+          for (Index k = 0; k < x.size(); ++k)
+            if (!std::isfinite(x[k]) || !(std::abs(x[k]) <= std::min(bound, std::numeric_limits<double>::max())))
+              return false;
+          return true;
+        };
+        CHECK(nvib::displacement_ok(u, bound) == reference(u));
+        for (Index at : {Index(0), m / 2, m - 1})
+          for (double bad : {nan, inf, -inf, -3.0, 0.5000000000000001, std::numeric_limits<double>::max()}) {
+            Vector w = u;
+            w[at] = bad;
+            CHECK(nvib::displacement_ok(w, bound) == reference(w));
+            ++cases;
+          }
+      }
+    }
+    std::printf("displacement_ok: %d cases as its definition\n", cases);
   }
   return nvib_test::finish("test_stream");
 }

@@ -1,6 +1,10 @@
 // Loops over the entries of a vector, unrolled for the small models.
 #pragma once
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
 #include <Eigen/Core>
 
 #include "compiler.hpp"
@@ -9,6 +13,24 @@ namespace nvib {
 
 namespace detail {
 inline bool finite(double x) { return std::isfinite(x); }
+
+// Integer tests on the bits of the state, with no floating-point dependency chain: a double is not
+// finite exactly when its exponent bits are all ones, and the bits of non-negative doubles (NaN above
+// +inf) order like the numbers.
+constexpr std::uint64_t kExpBits = 0x7FF0000000000000ull, kAbsBits = 0x7FFFFFFFFFFFFFFFull;
+constexpr std::uint64_t kExpOne = 0x0010000000000000ull;  // all-ones exponent + this sets bit 63
+inline std::uint64_t bits_of(double x) {
+  std::uint64_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+// Bit 63 set when some x_i is not finite (a loop the compiler vectorises, SSE2 included: a conjunction
+// of comparisons on bools is not).
+inline std::uint64_t nonfinite_bits(Eigen::Index n, const double* __restrict x) {
+  std::uint64_t bad = 0;
+  for (Eigen::Index i = 0; i < n; ++i) bad |= (bits_of(x[i]) & kExpBits) + kExpOne;
+  return bad;
+}
 
 // body(i) for i = 0 .. n-1. Up to 8 entries the count is a compile-time constant, so the loop is
 // unrolled into straight-line (and paired SIMD) code without the trip-count tests, alias checks

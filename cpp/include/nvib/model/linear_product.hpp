@@ -3,7 +3,10 @@
 //   band      K and C each a complete band of half-width 0, 1 or 2 (every position of the band stored:
 //             a chain, a shear building, a beam on springs): the band's entries row by row, the width
 //             known at compile time, interior rows without range tests. On the six-storey building it
-//             takes half the instructions of the general way.
+//             takes half the instructions of the general way. Where a run of rows has the same values
+//             on each diagonal (uniform storeys or links: the dampers of a chain), those rows multiply
+//             by the values held in registers and read no matrix: on a chain of 10^6 DOFs the product
+//             read 24 bytes per DOF of C's diagonals, a third of the explicit step's memory traffic.
 //   rayleigh  a lumped mass m and C = alpha diag(m) + beta K to round-off (Rayleigh damping as an
 //             engineer assembles it, or mass- or stiffness-proportional damping): by rows,
 //             K (u + beta v) + alpha m v. The product reads K's indices and values once where the
@@ -21,6 +24,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -46,6 +50,7 @@ class LinearProduct {
     if (bk >= kNone && bc >= kNone && !(bk == kNone && bc == kNone)) {
       kb_ = band_values(K_, bk, n_);
       cb_ = band_values(C_, bc, n_);
+      find_constant_rows(bk, bc);
       kernel_ = pick(bk, bc);
       form_ = Form::band;
       K_ = RowMatrix();  // the band holds every entry
@@ -93,6 +98,11 @@ class LinearProduct {
   }
   // The band form is used.
   bool banded() const { return form_ == Form::band; }
+  // The band's rows whose diagonals hold the same values (uniform storeys, links of one kind): the band
+  // product multiplies them by constants held in registers instead of reading the diagonals, the same
+  // products in the same order. Empty (first == second) where there are fewer than kConstantRows.
+  std::pair<Index, Index> constant_rows() const { return {const_lo_, const_hi_}; }
+  static constexpr Index kConstantRows = 64;
   // The coefficients of C = alpha M + beta K where form() is rayleigh (else 0).
   double rayleigh_alpha() const { return alpha_; }
   double rayleigh_beta() const { return beta_; }
@@ -191,6 +201,32 @@ class LinearProduct {
     return b;
   }
 
+  // The longest run of interior rows (every column of the band inside the matrix) around the middle row
+  // whose diagonals of K and of C hold, each, one value bit for bit: const_lo_ .. const_hi_ - 1, and
+  // those values in kc_ and cc_.
+  void find_constant_rows(int bk, int bc) {
+    const Index B = std::max({bk, bc, 0}), lo = B, hi = n_ - B;
+    const_lo_ = const_hi_ = 0;
+    if (hi - lo < kConstantRows) return;
+    const Index mid = lo + (hi - lo) / 2;
+    auto same = [&](const std::vector<double>& b, int w, Index i) {
+      for (int o = -w; o <= w; ++o) {
+        const double x = b[static_cast<std::size_t>((o + w) * n_ + i)], y = b[static_cast<std::size_t>((o + w) * n_ + mid)];
+        if (std::memcmp(&x, &y, sizeof x) != 0) return false;
+      }
+      return true;
+    };
+    auto row_same = [&](Index i) { return (bk < 0 || same(kb_, bk, i)) && (bc < 0 || same(cb_, bc, i)); };
+    Index a = mid, z = mid + 1;
+    while (a > lo && row_same(a - 1)) --a;
+    while (z < hi && row_same(z)) ++z;
+    if (z - a < kConstantRows) return;
+    const_lo_ = a;
+    const_hi_ = z;
+    for (int o = -bk; o <= bk; ++o) kc_[o + bk] = kb_[static_cast<std::size_t>((o + bk) * n_ + mid)];
+    for (int o = -bc; o <= bc; ++o) cc_[o + bc] = cb_[static_cast<std::size_t>((o + bc) * n_ + mid)];
+  }
+
   // Row i of a band of half-width B (B < 0: none): s += A(i, j) x(j) for the columns j of the band,
   // ascending, skipping those outside 0 .. n - 1 (the first and last B rows).
   template <int B>
@@ -214,15 +250,35 @@ class LinearProduct {
     const Index head = std::min<Index>(std::max<Index>(B, r0), r1), tail = std::max<Index>(head, std::min<Index>(n - B, r1));
     for (Index i = r0; i < head; ++i)
       out[i] = band_row_checked<BC>(band_row_checked<BK>(out[i], kb, u, i, n), cb, v, i, n);
-    // The interior rows: every column of the band inside the matrix, the widths known here.
-    for (Index i = head; i < tail; ++i) {
-      double s = out[i];
-      if constexpr (BK >= 0)
-        for (int o = -BK; o <= BK; ++o) s += kb[(o + BK) * n + i] * u[i + o];
-      if constexpr (BC >= 0)
-        for (int o = -BC; o <= BC; ++o) s += cb[(o + BC) * n + i] * v[i + o];
-      out[i] = s;
+    // The interior rows: every column of the band inside the matrix, the widths known here; where the
+    // diagonals are constant, their values from registers.
+    auto interior = [&](Index i0, Index i1) {
+      for (Index i = i0; i < i1; ++i) {
+        double s = out[i];
+        if constexpr (BK >= 0)
+          for (int o = -BK; o <= BK; ++o) s += kb[(o + BK) * n + i] * u[i + o];
+        if constexpr (BC >= 0)
+          for (int o = -BC; o <= BC; ++o) s += cb[(o + BC) * n + i] * v[i + o];
+        out[i] = s;
+      }
+    };
+    const Index c0 = std::min(std::max(p.const_lo_, head), tail), c1 = std::max(std::min(p.const_hi_, tail), c0);
+    interior(head, c0);
+    if (c1 > c0) {
+      constexpr int WK = BK >= 0 ? 2 * BK + 1 : 1, WC = BC >= 0 ? 2 * BC + 1 : 1;
+      double kc[WK], cc[WC];
+      for (int q = 0; q < WK; ++q) kc[q] = p.kc_[q];
+      for (int q = 0; q < WC; ++q) cc[q] = p.cc_[q];
+      for (Index i = c0; i < c1; ++i) {
+        double s = out[i];
+        if constexpr (BK >= 0)
+          for (int o = -BK; o <= BK; ++o) s += kc[o + BK] * u[i + o];
+        if constexpr (BC >= 0)
+          for (int o = -BC; o <= BC; ++o) s += cc[o + BC] * v[i + o];
+        out[i] = s;
+      }
     }
+    interior(c1, tail);
     for (Index i = tail; i < r1; ++i)
       out[i] = band_row_checked<BC>(band_row_checked<BK>(out[i], kb, u, i, n), cb, v, i, n);
     (void)kb, (void)cb, (void)u, (void)v;
@@ -293,6 +349,8 @@ class LinearProduct {
   Index n_ = 0, reach_ = 0;
   RowMatrix K_, C_;
   std::vector<double> kb_, cb_;
+  Index const_lo_ = 0, const_hi_ = 0;  // constant_rows()
+  double kc_[2 * kMaxBand + 1] = {}, cc_[2 * kMaxBand + 1] = {};
   Vector alpha_m_;  // alpha m (rayleigh)
   double alpha_ = 0.0, beta_ = 0.0;
   Kernel kernel_ = &add_rows;

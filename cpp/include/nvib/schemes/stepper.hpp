@@ -234,12 +234,10 @@ class StepperBase {
   static void scale(Index n, double* __restrict x, double w) {
     for (Index i = 0; i < n; ++i) x[i] *= w;
   }
-  // m = max(m, |u_i|), finite = false if some u_i is not finite (loops the compiler vectorises: a
-  // conjunction of comparisons, as displacement_ok, and Eigen's maximum).
+  // m = max(m, |u_i|), finite = false if some u_i is not finite (loops the compiler vectorises: the
+  // bits' test, and Eigen's maximum).
   static void largest(Index n, const double* __restrict u, double& m, bool& finite) {
-    bool ok = true;
-    for (Index i = 0; i < n; ++i) ok &= std::abs(u[i]) <= std::numeric_limits<double>::max();
-    finite = finite && ok;
+    finite = finite && !(detail::nonfinite_bits(n, u) >> 63);
     if (n > 0) m = std::max(m, Eigen::Map<const Vector>(u, n).cwiseAbs().maxCoeff());
   }
 

@@ -86,36 +86,33 @@ double load_displacement_scale(const ModelT& model, double t0, double t1) {
   return std::isfinite(scale) ? scale : 0.0;
 }
 
-// Integer tests on the bits of the state, with no floating-point dependency
-// chain: a double is not finite exactly when its exponent bits are all ones,
-// and the bits of non-negative doubles (NaN above +inf) order like the numbers.
 namespace detail {
-constexpr std::uint64_t kExpBits = 0x7FF0000000000000ull, kAbsBits = 0x7FFFFFFFFFFFFFFFull;
-constexpr std::uint64_t kExpOne = 0x0010000000000000ull;  // all-ones exponent + this sets bit 63
-inline std::uint64_t bits_of(double x) {
-  std::uint64_t b;
-  std::memcpy(&b, &x, sizeof b);
-  return b;
-}
-// Bit 63 set when some entry is not finite.
-inline std::uint64_t nonfinite_bits(const Vector& x) {
-  std::uint64_t bad = 0;
-  const double* p = x.data();
-  for (Index i = 0, n = x.size(); i < n; ++i) bad |= (bits_of(p[i]) & kExpBits) + kExpOne;
-  return bad;
-}
+// Bit 63 set when some entry is not finite (nonfinite_bits in base/loops.hpp).
+inline std::uint64_t nonfinite_bits(const Vector& x) { return nonfinite_bits(x.size(), x.data()); }
 }  // namespace detail
 
-// Every |u_i| <= bound and finite.
-// A comparison with NaN is false and |inf| exceeds every finite bound (an infinite bound is taken as
-// the largest finite double), so one branch-free conjunction of comparisons, two per SSE2
-// instruction, also catches the non-finite entries.
+// Every |u_i| <= bound and finite. A comparison with NaN is false and |inf| exceeds every finite bound
+// (an infinite bound is taken as the largest finite double). Up to 8 entries, a conjunction of
+// comparisons in straight-line code; above, block by block, the bits' test and the largest |u_i| (loops
+// the compiler vectorises, and the block still in cache for the second: the conjunction on bools is
+// compiled entry by entry).
 inline bool displacement_ok(const Vector& u, double bound) {
   const double* p = u.data();
+  const Index n = u.size();
   const double finite_bound = std::min(bound, std::numeric_limits<double>::max());
-  bool ok = true;
-  detail::for_each_index(u.size(), [&ok, p, finite_bound](Index i) { ok &= std::abs(p[i]) <= finite_bound; });
-  return ok;
+  if (n <= 8) {
+    bool ok = true;
+    detail::for_each_index(n, [&ok, p, finite_bound](Index i) { ok &= std::abs(p[i]) <= finite_bound; });
+    return ok;
+  }
+  constexpr Index kBlock = 1024;
+  for (Index b = 0; b < n; b += kBlock) {
+    const Index m = std::min(kBlock, n - b);
+    if ((detail::nonfinite_bits(m, p + b) >> 63) ||
+        !(Eigen::Map<const Vector>(p + b, m).cwiseAbs().maxCoeff() <= finite_bound))
+      return false;
+  }
+  return true;
 }
 // The same test after a step, on the largest |u_i| the step measured where it did (measured_max_u()).
 template <class Stepper>
