@@ -63,7 +63,12 @@ void same_bits_with(const Scheme& scheme, const std::string& what, ModelT model,
   bool same = true;
   double moved = 0.0;
   for (int s = 0; s < 40; ++s) {
+    const Vector before = streamed.a();
     CHECK(streamed.step() == nvib::Status::success && staged.step() == nvib::Status::success);
+    // the acceleration of the step before, which the error estimate's samples read (previous_a())
+    CHECK(streamed.previous_a() != nullptr && staged.previous_a() != nullptr);
+    CHECK(Eigen::Map<const Vector>(streamed.previous_a(), n) == before);
+    CHECK(Eigen::Map<const Vector>(staged.previous_a(), n) == before);
     same = same && streamed.u() == staged.u() && streamed.v() == staged.v() && streamed.a() == staged.a();
     // the step's measured max |u| is the one the loop would read
     CHECK(streamed.measured_max_u() == streamed.u().cwiseAbs().maxCoeff());
@@ -226,6 +231,14 @@ int main() {
       }
     }
     std::printf("displacement_ok: %d cases as its definition\n", cases);
+  }
+  // The half-step velocity keeps no a_{n-1} (its step updates a in place): previous_a() says so, and
+  // the error estimate keeps its own copy.
+  {
+    auto model = fx::make_effect_model(nvib::Mass::diagonal(Vector::Ones(3)), {fx::hardening_spring({{0, 1.0}}, 4.0, 1.0)});
+    auto st = nvib::make_stepper(nvib::CentralDifference(nvib::CentralDifference::Velocity::half_step), model, 0.01);
+    st.initialize(0.0, Vector::Constant(3, 0.1), Vector::Zero(3));
+    CHECK(st.step() == nvib::Status::success && st.previous_a() == nullptr);
   }
   return nvib_test::finish("test_stream");
 }

@@ -94,6 +94,10 @@ class CentralDifferenceStepper : public StepperBase<ModelT> {
   }
 
   const CentralDifference& scheme() const { return scheme_; }
+  // a_{n-1} where the step keeps it (the synchronized velocity: the swap leaves it in anew_), else null.
+  const double* previous_a() const {
+    return scheme_.velocity == CentralDifference::Velocity::synchronized && this->step_index() > 0 ? anew_.data() : nullptr;
+  }
 
   // The same updates, block by block along the DOFs around the force (streamed_step). Out of line: in
   // step() it took the inliner's budget from the small models' path (the six-storey building's step 25 %

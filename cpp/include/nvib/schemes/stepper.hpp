@@ -292,6 +292,10 @@ class TwoLevelStepper : public StepperBase<ModelT> {
     aprev_ = ck_aprev_[static_cast<size_t>(slot)];
   }
 
+  // a_{n-1}, the acceleration of the step before the last (the error estimate's samples read it instead
+  // of keeping a copy).
+  const double* previous_a() const { return aprev_.data(); }
+
   Index state_size() const { return this->size_with(this->size()); }
   Vector state() const { return this->state_with(aprev_); }
   void set_state(double t, const Vector& x) { this->set_state_with(t, x, aprev_); }

@@ -158,6 +158,12 @@ inline Vector relative_to_peaks(const Vector& error, const Vector& peak) {
   return out;
 }
 
+// Steppers that keep a_{n-1} (previous_a()).
+template <class S, class = void>
+struct keeps_previous_a : std::false_type {};
+template <class S>
+struct keeps_previous_a<S, std::void_t<decltype(std::declval<const S&>().previous_a())>> : std::true_type {};
+
 // Estimates every DOF's error relative to its peak (see the top of this file) into Result::error_estimate.
 template <class Model>
 class ErrorEstimate {
@@ -228,12 +234,15 @@ class ErrorEstimate {
     const double* a = st.a().data();
     double* p = prev_.data();
     if (w_ == 0.0) {
-      // Sampled: a_{n-1} is kept at the step before each sample, the jerk and the peak taken at the sample.
-      if (phase == kSampleEvery - 1) {
+      // Sampled: a_{n-1} is kept at the step before each sample (or read from the stepper that keeps
+      // it), the jerk and the peak taken at the sample.
+      const double* kept = previous_a(st);
+      if (phase == kSampleEvery - 1 && kept == nullptr) {
         for (Index k = 0; k < n; ++k) p[k] = a[k];
       } else if (phase == 0) {
         age_to(st, i);
-        sample(st, [a](Index k) { return a[k]; }, [p](Index k) { return p[k]; });
+        const double* before = kept != nullptr ? kept : p;
+        sample(st, [a](Index k) { return a[k]; }, [before](Index k) { return before[k]; });
       }
       return;
     }
@@ -245,6 +254,14 @@ class ErrorEstimate {
       b[k] = (1.0 - w) * a[k] + w * p[k];
       p[k] = a[k];
     }
+  }
+  // a_{n-1} from a stepper that keeps it (previous_a(), null where it does not at this step), else null.
+  template <class Stepper>
+  static const double* previous_a(const Stepper& st) {
+    if constexpr (keeps_previous_a<Stepper>::value)
+      return st.previous_a();
+    else
+      return nullptr;
   }
   // Into the result: per DOF, relative to its peak.
   void finish() { res_.error_estimate = relative_to_peaks(c_.c3 * h_ * jerk_ + c_.c2 * h_ * level_, peak_); }
