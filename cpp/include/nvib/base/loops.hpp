@@ -1,6 +1,7 @@
 // Loops over the entries of a vector, unrolled for the small models.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,9 +16,8 @@ namespace detail {
 inline bool finite(double x) { return std::isfinite(x); }
 
 // Integer tests on the bits of the state, with no floating-point dependency chain: a double is not
-// finite exactly when its exponent bits are all ones, and the bits of non-negative doubles (NaN above
-// +inf) order like the numbers.
-constexpr std::uint64_t kExpBits = 0x7FF0000000000000ull, kAbsBits = 0x7FFFFFFFFFFFFFFFull;
+// finite exactly when its exponent bits are all ones.
+constexpr std::uint64_t kExpBits = 0x7FF0000000000000ull;
 constexpr std::uint64_t kExpOne = 0x0010000000000000ull;  // all-ones exponent + this sets bit 63
 inline std::uint64_t bits_of(double x) {
   std::uint64_t b;
@@ -30,6 +30,12 @@ inline std::uint64_t nonfinite_bits(Eigen::Index n, const double* __restrict x) 
   std::uint64_t bad = 0;
   for (Eigen::Index i = 0; i < n; ++i) bad |= (bits_of(x[i]) & kExpBits) + kExpOne;
   return bad;
+}
+// m = max(m, |x_i|), finite = false if some x_i is not finite (loops the compiler vectorises: the bits'
+// test, and Eigen's maximum).
+inline void largest(Eigen::Index n, const double* __restrict x, double& m, bool& finite) {
+  finite = finite && !(nonfinite_bits(n, x) >> 63);
+  if (n > 0) m = std::max(m, Eigen::Map<const Eigen::VectorXd>(x, n).cwiseAbs().maxCoeff());
 }
 
 // body(i) for i = 0 .. n-1. Up to 8 entries the count is a compile-time constant, so the loop is

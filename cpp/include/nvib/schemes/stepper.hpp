@@ -220,7 +220,7 @@ class StepperBase {
         u, forces_v, t1, anew, stats_,
         [&](Index p, Index q) {
           drift(p, q);
-          largest(q - p, u + p, umax, finite);
+          detail::largest(q - p, u + p, umax, finite);
         },
         [&](Index p, Index q) {
           if (uniform)  // (one mass: one inverse, no array to read)
@@ -233,12 +233,6 @@ class StepperBase {
   }
   static void scale(Index n, double* __restrict x, double w) {
     for (Index i = 0; i < n; ++i) x[i] *= w;
-  }
-  // m = max(m, |u_i|), finite = false if some u_i is not finite (loops the compiler vectorises: the
-  // bits' test, and Eigen's maximum).
-  static void largest(Index n, const double* __restrict u, double& m, bool& finite) {
-    finite = finite && !(detail::nonfinite_bits(n, u) >> 63);
-    if (n > 0) m = std::max(m, Eigen::Map<const Vector>(u, n).cwiseAbs().maxCoeff());
   }
 
   // A failed step: the stepper keeps its state before the step.

@@ -107,10 +107,10 @@ inline bool displacement_ok(const Vector& u, double bound) {
   }
   constexpr Index kBlock = 1024;
   for (Index b = 0; b < n; b += kBlock) {
-    const Index m = std::min(kBlock, n - b);
-    if ((detail::nonfinite_bits(m, p + b) >> 63) ||
-        !(Eigen::Map<const Vector>(p + b, m).cwiseAbs().maxCoeff() <= finite_bound))
-      return false;
+    double m = 0.0;
+    bool finite = true;
+    detail::largest(std::min(kBlock, n - b), p + b, m, finite);
+    if (!finite || !(m <= finite_bound)) return false;
   }
   return true;
 }
