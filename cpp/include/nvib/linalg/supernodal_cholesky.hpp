@@ -160,6 +160,68 @@ inline void trsm_right_lower_t(Index m, Index k, const double* T, Index ldt, dou
   }
 }
 
+// Forward substitution through a supernode of NC <= kScalarSolve columns (its panel L: nr rows,
+// column-major, its row indices rs, x1 its NC entries of w): the triangle, then each row below it takes
+// its NC products in column order, the index and the entry of w read and written once a row. Each
+// entry of w gets the same subtractions in the same order as column by column: the same bits.
+template <bool LDLT, int NC>
+inline void forward_small(const double* L, Index nr, const int* rs, double* x1, double* w) {
+  double xs[NC];
+  for (int k = 0; k < NC; ++k) {
+    const double* lk = L + k * nr;
+    if constexpr (!LDLT) x1[k] /= lk[k];
+    const double xk = x1[k];
+    xs[k] = xk;
+    for (int i = k + 1; i < NC; ++i) x1[i] -= lk[i] * xk;
+  }
+  for (Index i = NC; i < nr; ++i) {
+    double v = w[rs[i]];
+    for (int k = 0; k < NC; ++k) v -= L[k * nr + i] * xs[k];
+    w[rs[i]] = v;
+  }
+}
+
+// Backward substitution through the same supernode: the rows below the triangle first (as the dense
+// path's x1 -= L21^T t), each column's sum in P interleaved partial sums (P * NC >= 4 independent
+// chains: one sum alone waits on each addition), then the triangle.
+template <bool LDLT, int NC>
+inline void backward_small(const double* L, Index nr, const int* rs, double* x1, const double* w) {
+  constexpr int P = NC >= 4 ? 1 : (NC == 1 ? 4 : 2);
+  double s[P][NC] = {};
+  Index i = NC;
+  for (; i + P <= nr; i += P)
+    for (int p = 0; p < P; ++p) {
+      const double g = w[rs[i + p]];
+      for (int k = 0; k < NC; ++k) s[p][k] += L[k * nr + i + p] * g;
+    }
+  for (; i < nr; ++i) {
+    const double g = w[rs[i]];
+    for (int k = 0; k < NC; ++k) s[0][k] += L[k * nr + i] * g;
+  }
+  for (int k = 0; k < NC; ++k) {
+    double t = s[0][k];
+    for (int p = 1; p < P; ++p) t += s[p][k];
+    x1[k] -= t;
+  }
+  for (int k = NC - 1; k >= 0; --k) {
+    const double* lk = L + k * nr;
+    double v = x1[k];
+    for (int q = k + 1; q < NC; ++q) v -= lk[q] * x1[q];
+    x1[k] = LDLT ? v : v / lk[k];
+  }
+}
+
+template <bool LDLT, bool Forward, int NC = 1>
+inline void solve_small(Index nc, const double* L, Index nr, const int* rs, double* x1, double* w) {
+  if constexpr (NC < kScalarSolve) {
+    if (nc != NC) return solve_small<LDLT, Forward, NC + 1>(nc, L, nr, rs, x1, w);
+  }
+  if constexpr (Forward)
+    forward_small<LDLT, NC>(L, nr, rs, x1, w);
+  else
+    backward_small<LDLT, NC>(L, nr, rs, x1, w);
+}
+
 // Right-looking scalar factorisation of the m x k column-major block a (lda), m >= k: its top k x k
 // is factorised (LL^T, or unit-lower LDL^T with D on the diagonal) and the rows below are divided by
 // it. Returns the local column of a failing pivot, or -1.
@@ -1468,13 +1530,7 @@ void SupernodalCholesky<LDLT>::solve_in_place(double* x, Vector& work) const {
     const double* L = values_.data() + val_ptr_[su];
     double* x1 = w + k1;
     if (nc <= kScalarSolve) {
-      for (Index k = 0; k < nc; ++k) {
-        const double* lk = L + k * nr;
-        if constexpr (!LDLT) x1[k] /= lk[k];
-        const double xk = x1[k];
-        for (Index i = k + 1; i < nc; ++i) x1[i] -= lk[i] * xk;
-        for (Index i = nc; i < nr; ++i) w[rs[i]] -= lk[i] * xk;
-      }
+      solve_small<LDLT, true>(nc, L, nr, rs, x1, w);
       continue;
     }
     const ConstPanel L11(L, nc, nc, Eigen::OuterStride<>(nr));
@@ -1499,13 +1555,7 @@ void SupernodalCholesky<LDLT>::solve_in_place(double* x, Vector& work) const {
     const double* L = values_.data() + val_ptr_[su];
     double* x1 = w + k1;
     if (nc <= kScalarSolve) {
-      for (Index k = nc - 1; k >= 0; --k) {
-        const double* lk = L + k * nr;
-        double v = x1[k];
-        for (Index i = k + 1; i < nc; ++i) v -= lk[i] * x1[i];
-        for (Index i = nc; i < nr; ++i) v -= lk[i] * w[rs[i]];
-        x1[k] = LDLT ? v : v / lk[k];
-      }
+      solve_small<LDLT, false>(nc, L, nr, rs, x1, w);
       continue;
     }
     const ConstPanel L11(L, nc, nc, Eigen::OuterStride<>(nr));
