@@ -71,7 +71,7 @@ class BandedLDLT {
   bool factorize(const double* values) {
     switch (b_) {
       case 0: factor<0>(values); break;
-      case 1: factor<1>(values); break;
+      case 1: return tridiagonal(values);
       case 2: factor<2>(values); break;
       case 3: factor<3>(values); break;
       default: factor<-1>(values);
@@ -103,6 +103,35 @@ class BandedLDLT {
   const Vector& pivots() const { return d_; }
 
  private:
+  // b = 1, the Thomas algorithm: the recurrence D(i) = A(i, i) - A(i, i-1)^2 / D(i-1) is the
+  // factorisation's critical path (one division and one subtraction a row); 1 / D(i-1) and
+  // l_i = A(i, i-1) / D(i-1) are off it (a second division, then a product: two divisions a row keep the
+  // divider from setting the pace), kept for the substitutions, which then carry no division. The
+  // pivots are tested (factorize()'s test) as they come, in the same loop.
+  bool tridiagonal(const double* __restrict a) {
+    const Index n = n_;
+    if (n == 0) return false;
+    double* __restrict L = band_.data();
+    double* __restrict D = d_.data();
+    double* __restrict inv = inv_.data();
+    constexpr double big = std::numeric_limits<double>::max();
+    double dprev = D[0] = a[1];
+    double lo = std::abs(dprev), hi = lo;
+    bool finite = lo <= big;  // (false for NaN and infinity)
+    for (Index i = 1; i < n; ++i) {
+      const double s = a[2 * i], r = 1.0 / dprev, l = s * r;
+      inv[i - 1] = r;
+      L[2 * i] = l;
+      dprev = D[i] = a[2 * i + 1] - (s * s) / dprev;
+      const double p = std::abs(dprev);
+      finite &= p <= big;
+      lo = std::min(lo, p);
+      hi = std::max(hi, p);
+    }
+    inv[n - 1] = 1.0 / dprev;
+    return finite && lo > 1e-14 * hi;
+  }
+
   // Row i's entry in column j (i - b <= j <= i): L(i, j) below the diagonal once factorised.
   Index at(Index i, Index j) const { return i * w_ + (j - i + b_); }
 
@@ -116,20 +145,6 @@ class BandedLDLT {
     double* __restrict D = d_.data();
     if constexpr (B == 0) {
       for (Index i = 0; i < n; ++i) D[i] = L[i] = a[i];
-    } else if constexpr (B == 1) {
-      // Tridiagonal: the recurrence D(i) = A(i, i) - A(i, i-1)^2 / D(i-1) is the factorisation's critical
-      // path (one division and one subtraction a row); 1 / D(i-1) and l_i = A(i, i-1) / D(i-1) are off
-      // it (a second division, then a product: two divisions a row keep the divider from setting the
-      // pace), kept for the substitutions, which then carry no division.
-      double* __restrict inv = inv_.data();
-      double dprev = D[0] = a[1];
-      for (Index i = 1; i < n; ++i) {
-        const double s = a[2 * i], r = 1.0 / dprev, l = s * r;
-        inv[i - 1] = r;
-        L[2 * i] = l;
-        dprev = D[i] = a[2 * i + 1] - (s * s) / dprev;
-      }
-      inv[n - 1] = 1.0 / dprev;
     } else {
       double t[B > 0 ? B : 1];  // t_k of row i for b <= 3 (the general path keeps them in the row itself)
       for (Index i = 0; i < n; ++i) {

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "../base/interrupt.hpp"
+#include "../base/loops.hpp"
 #include "../base/types.hpp"
 #include "options.hpp"
 #include "system.hpp"
@@ -156,14 +157,13 @@ class NewtonSolver {
     double* __restrict du = du_.data();
     double* __restrict xp = x.data();
     double dn = 0.0, xn = 0.0;
-    const Index n = x.size();
-    for (Index i = 0; i < n; ++i) {
+    detail::for_each_index(x.size(), [&](Index i) {  // (unrolled up to 8 DOFs)
       const double d = -r[i], xi = xp[i] + d;
       du[i] = d;
       xp[i] = xi;
       dn = std::max(dn, std::abs(d));
       xn = std::max(xn, std::abs(xi));
-    }
+    });
     du_norm = dn;
     x_norm = xn;
     if constexpr (has_increment<Problem>::value)
