@@ -252,6 +252,14 @@ void linear_product_reordered_cases() {
         worst = std::max(worst, e);
         CHECK(e <= 8.0);
       }
+      // with a scratch (the model's add_linear): the same bits; the scratch is taken by rayleigh alone
+      {
+        Vector formed = out0, scratch = Vector::Constant(n, std::numeric_limits<double>::quiet_NaN());
+        p.add(u.data(), v.data(), formed.data(), scratch.data());
+        CHECK(bitwise_equal(formed, out));
+        CHECK(p.uses_scratch() == (p.form() == Form::rayleigh));
+        CHECK(p.uses_scratch() == !std::isnan(scratch[n - 1]));
+      }
       // a range of rows gives those rows of the whole
       if (n > 4) {
         Vector part = out0;

@@ -489,8 +489,14 @@ class Model {
       f_(u, v, t, out);
     if (has_K_ || has_C_) add_linear(u.data(), v.data(), out.data());
   }
-  // out += K u + C v in one pass by rows (linear_product.hpp).
-  void add_linear(const double* u, const double* v, double* out) const { lin_->product.add(u, v, out); }
+  // out += K u + C v in one pass by rows (linear_product.hpp), through the model's own scratch where
+  // the product's form takes one (each run's stepper holds a copy of the model: the scratch is its own).
+  void add_linear(const double* u, const double* v, double* out) const {
+    const LinearProduct& p = lin_->product;
+    if (!p.uses_scratch()) return p.add(u, v, out);
+    if (product_scratch_.size() != size()) product_scratch_.resize(size());  // (the first evaluation, at a run's start)
+    p.add(u, v, out, product_scratch_.data());
+  }
 
   // Central differences, step cbrt(eps) * max(|x_j|, 1) (the usual choice for
   // a second-order difference); velocity columns only if f uses velocity.
@@ -588,6 +594,7 @@ class Model {
   bool stream_allowed_ = true;
   Vector fu_, fv_, fp_, fm_;  // finite-difference workspace (sized on first use)
   Vector work_;               // energy accounting (sized on first use)
+  mutable Vector product_scratch_;  // add_linear(): the product's scratch (sized on first use)
   void work(Index n) {
     if (work_.size() != n) work_.resize(n);
   }
