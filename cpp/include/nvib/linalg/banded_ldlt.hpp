@@ -85,7 +85,7 @@ class BandedLDLT {
       lo = std::min(lo, p);
       hi = std::max(hi, p);
     }
-    return n_ > 0 && finite && lo > 1e-14 * hi;
+    return n_ > 0 && pivots_ok(finite, lo, hi);
   }
 
   // x <- A^{-1} x
@@ -129,8 +129,11 @@ class BandedLDLT {
       hi = std::max(hi, p);
     }
     inv[n - 1] = 1.0 / dprev;
-    return finite && lo > 1e-14 * hi;
+    return pivots_ok(finite, lo, hi);
   }
+  // The pivots' test, from their magnitudes' smallest and largest: every one finite, none below 1e-14 of
+  // the largest.
+  static bool pivots_ok(bool finite, double lo, double hi) { return finite && lo > 1e-14 * hi; }
 
   // Row i's entry in column j (i - b <= j <= i): L(i, j) below the diagonal once factorised.
   Index at(Index i, Index j) const { return i * w_ + (j - i + b_); }

@@ -83,7 +83,7 @@ class LinearProduct {
   // column's entries (a 3-D solid's column has about 80), then takes the rows on it: one gather and one
   // multiply-add an entry instead of two gathers and two of each. The same bits as add().
   void add(const double* u, const double* v, double* out, double* scratch) const {
-    if (form_ == Form::rayleigh && scratch != nullptr)
+    if (uses_scratch() && scratch != nullptr)
       add_rayleigh_formed(*this, u, v, out, scratch);
     else
       kernel_(*this, u, v, out, 0, n_);
@@ -296,38 +296,34 @@ class LinearProduct {
       out[i] = band_row_checked<BC>(band_row_checked<BK>(out[i], kb, u, i, n), cb, v, i, n);
     (void)kb, (void)cb, (void)u, (void)v;
   }
-  // The rayleigh form's rows, four at a time: s_i += term(q) for q = o[i] .. o[i+1] - 1 in order. Each
-  // row's sum is a chain of additions (each waits on the one before); four rows' chains side by side
-  // keep the adder busy where one row's alone waited on it (three loads an entry: the load ports still
-  // have room). Every row adds the same terms in the same order as row by row: the same bits. s holds
-  // rows i .. i+3's sums.
-  template <class Term>
-  static NVIB_ALWAYS_INLINE void four_rows(const int* __restrict o, Index i, double (&s)[4], Term term) {
-    const int q0 = o[i], q1 = o[i + 1], q2 = o[i + 2], q3 = o[i + 3], e = o[i + 4];
-    const int l0 = q1 - q0, l1 = q2 - q1, l2 = q3 - q2, l3 = e - q3;
-    const int m = std::min(std::min(l0, l1), std::min(l2, l3));
-    double s0 = s[0], s1 = s[1], s2 = s[2], s3 = s[3];
-    for (int k = 0; k < m; ++k) {
-      s0 += term(q0 + k);
-      s1 += term(q1 + k);
-      s2 += term(q2 + k);
-      s3 += term(q3 + k);
-    }
-    for (int k = m; k < l0; ++k) s0 += term(q0 + k);
-    for (int k = m; k < l1; ++k) s1 += term(q1 + k);
-    for (int k = m; k < l2; ++k) s2 += term(q2 + k);
-    for (int k = m; k < l3; ++k) s3 += term(q3 + k);
-    s[0] = s0, s[1] = s1, s[2] = s2, s[3] = s3;
-  }
-  // out_i = finish(i, out_i + the row's terms), rows r0 .. r1 - 1.
+  // out_i = finish(i, out_i + sum_q term(q)) for rows r0 .. r1 - 1, q = o[i] .. o[i+1] - 1 in order (the
+  // rayleigh form's rows). Four rows at a time: each row's sum is a chain of additions (each waits on the
+  // one before), and four rows' chains side by side keep the adder busy where one row's alone waited on
+  // it (three loads an entry: the load ports still have room). Every row adds the same terms in the same
+  // order as row by row: the same bits.
   template <class Term, class Finish>
   static NVIB_ALWAYS_INLINE void by_rows(const int* __restrict o, double* __restrict out, Index r0, Index r1, Term term,
                                          Finish finish) {
     Index i = r0;
     for (; i + 4 <= r1; i += 4) {
-      double s[4] = {out[i], out[i + 1], out[i + 2], out[i + 3]};
-      four_rows(o, i, s, term);
-      for (int r = 0; r < 4; ++r) out[i + r] = finish(i + r, s[r]);
+      const int q0 = o[i], q1 = o[i + 1], q2 = o[i + 2], q3 = o[i + 3], e = o[i + 4];
+      const int l0 = q1 - q0, l1 = q2 - q1, l2 = q3 - q2, l3 = e - q3;
+      const int m = std::min(std::min(l0, l1), std::min(l2, l3));
+      double s0 = out[i], s1 = out[i + 1], s2 = out[i + 2], s3 = out[i + 3];
+      for (int k = 0; k < m; ++k) {
+        s0 += term(q0 + k);
+        s1 += term(q1 + k);
+        s2 += term(q2 + k);
+        s3 += term(q3 + k);
+      }
+      for (int k = m; k < l0; ++k) s0 += term(q0 + k);
+      for (int k = m; k < l1; ++k) s1 += term(q1 + k);
+      for (int k = m; k < l2; ++k) s2 += term(q2 + k);
+      for (int k = m; k < l3; ++k) s3 += term(q3 + k);
+      out[i] = finish(i, s0);
+      out[i + 1] = finish(i + 1, s1);
+      out[i + 2] = finish(i + 2, s2);
+      out[i + 3] = finish(i + 3, s3);
     }
     for (; i < r1; ++i) {
       double s = out[i];
