@@ -59,6 +59,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "../base/loops.hpp"
 #include "../base/types.hpp"
 #include "../model/model.hpp"
 #include "../schemes/scheme.hpp"
@@ -207,7 +208,13 @@ class ErrorEstimate {
     aged_ = i;
     if (rate_ > 0.0) {
       const double T = kSqrt2 / rate_;
-      age_ = T + (age_ - T) * std::exp(-span / T);
+      // exp(-span / T) kept while span and T do not change (generalized-alpha ages every step)
+      if (!(span == decay_span_ && T == decay_T_)) {
+        decay_ = std::exp(-span / T);
+        decay_span_ = span;
+        decay_T_ = T;
+      }
+      age_ = T + (age_ - T) * decay_;
     } else {
       age_ += span;
     }
@@ -247,13 +254,27 @@ class ErrorEstimate {
       return;
     }
     age_to(st, i);
-    double* b = blended_.data();
-    const double w = w_;
-    sample(st, [a, p, w](Index k) { return (1.0 - w) * a[k] + w * p[k]; }, [b](Index k) { return b[k]; });
-    for (Index k = 0; k < n; ++k) {
-      b[k] = (1.0 - w) * a[k] + w * p[k];
-      p[k] = a[k];
-    }
+    // Every step, in one pass: the sample of the alpha-point acceleration x against the one of the
+    // step before (b), then x kept in b and a_n in p for the next step.
+    const double w = w_, tau = age_;
+    const double* __restrict an = a;
+    const double* __restrict u = st.u().data();
+    double *__restrict b = blended_.data(), *__restrict pp = p, *__restrict j = jerk_.data(),
+                       *__restrict l = level_.data(), *__restrict pk = peak_.data();
+    auto pass = [&](auto with_level) {
+      detail::for_each_index(n, [&](Index k) {
+        const double x = (1.0 - w) * an[k] + w * pp[k];
+        j[k] = std::max(j[k], tau * std::abs(x - b[k]));
+        if constexpr (decltype(with_level)::value) l[k] = std::max(l[k], tau * std::abs(x));
+        pk[k] = std::max(pk[k], std::abs(u[k]));
+        b[k] = x;
+        pp[k] = an[k];
+      });
+    };
+    if (c_.c2 > 0.0)
+      pass(std::true_type{});
+    else
+      pass(std::false_type{});
   }
   // a_{n-1} from a stepper that keeps it (previous_a(), null where it does not at this step), else null.
   template <class Stepper>
@@ -274,6 +295,7 @@ class ErrorEstimate {
   double w_, h_;
   Vector prev_, blended_, jerk_, level_, peak_;
   double age_ = 0.0, rate_ = 0.0, dissipated_ = 0.0, kinetic_ = 0.0, hyst0_ = 0.0;
+  double decay_ = 1.0, decay_span_ = std::numeric_limits<double>::quiet_NaN(), decay_T_ = decay_span_;  // age_to()'s
   std::int64_t aged_ = 0;  // the step the age is of
 };
 
