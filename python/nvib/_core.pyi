@@ -166,6 +166,7 @@ class Model:
     K: Array
     C: Array
     linear_product: str
+    linear_product_block: int
     def __init__(self, mass: Array, effects: Sequence[Effect], K: Array, C: Array, dofs: Sequence[str],
                  force: Callable[..., Any] | None = ..., tangent: Callable[..., Any] | None = ...,
                  uses_velocity: bool = ..., uses_time: bool = ..., laws: Sequence[tuple] = ...,

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -290,11 +291,100 @@ void linear_product_reordered_cases() {
   std::printf("LinearProduct rayleigh / shared: %d cases, within %.1f eps of the rows' sums\n", cases, worst);
 }
 
+// A mesh-like pattern of nodes of B DOFs: each node coupled to a few nodes within +-6 by a full B x B
+// block, except that `holes` of each coupling block's off-diagonal positions are left out (a brick
+// mesh's blocks hold some exact zeros).
+SparseMatrix node_pattern(Index nodes, int B, int holes, std::mt19937& gen) {
+  std::uniform_int_distribution<int> offset(1, 6), pick(0, B * B - 1);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::vector<Eigen::Triplet<double, int>> t;
+  auto block = [&](Index a, Index b, bool full) {
+    std::vector<bool> keep(static_cast<size_t>(B * B), true);
+    for (int h = 0; h < holes && !full; ++h) keep[static_cast<size_t>(pick(gen))] = false;
+    for (int r = 0; r < B; ++r)
+      for (int c = 0; c < B; ++c)
+        if (keep[static_cast<size_t>(r * B + c)]) {
+          const double x = value(gen);
+          t.emplace_back(int(B * a + r), int(B * b + c), x);
+          t.emplace_back(int(B * b + c), int(B * a + r), x);
+        }
+  };
+  for (Index k = 0; k < nodes; ++k) {
+    block(k, k, true);
+    for (int e = 0; e < 3; ++e) {
+      const Index other = k + offset(gen);
+      if (other < nodes) block(k, other, false);
+    }
+  }
+  SparseMatrix A(B * nodes, B * nodes);
+  A.setFromTriplets(t.begin(), t.end());
+  for (Index i = 0; i < A.rows(); ++i) A.coeffRef(i, i) += 40.0;
+  A.makeCompressed();
+  return A;
+}
+
+// The rayleigh form on node blocks (LinearProduct::node_block()): taken for nodes of 3 and 2 DOFs whose
+// blocks are nearly full, not where they are not; every way of taking it (whole, with a scratch, in
+// pieces of rows across the blocks) gives the bits of the rows' rayleigh sums: out0 + sum over K's
+// stored columns, ascending, of K_ij (u_j + beta v_j), then + alpha m_i v_i.
+void linear_product_node_blocks() {
+  std::mt19937 gen(2718);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> mass(0.5, 4.0);
+  int cases = 0;
+  for (int B : {3, 2})
+    for (int holes : {0, 1, 6}) {
+      const SparseMatrix K = node_pattern(900 / B, B, holes, gen);
+      const Index n = K.rows();
+      Vector m(n), u(n), v(n), out0(n);
+      for (Index i = 0; i < n; ++i) m[i] = mass(gen), u[i] = normal(gen), v[i] = normal(gen), out0[i] = normal(gen);
+      SparseMatrix Mlump(n, n);
+      for (Index i = 0; i < n; ++i) Mlump.insert(i, i) = m[i];
+      const SparseMatrix C = SparseMatrix(0.37 * Mlump) + SparseMatrix(2.3e-3 * K);
+      const nvib::LinearProduct p(K, C, &m);
+      CHECK(p.form() == nvib::LinearProduct::Form::rayleigh);
+      // the blocks' share of K's entries decides
+      long blocks = 0;
+      {
+        std::set<std::pair<Index, Index>> seen;
+        for (Index j = 0; j < K.outerSize(); ++j)
+          for (SparseMatrix::InnerIterator it(K, j); it; ++it) seen.insert({it.row() / B, it.col() / B});
+        blocks = static_cast<long>(seen.size());
+      }
+      const bool blocked = double(blocks) * B * B <= nvib::LinearProduct::kMaxPadding * double(K.nonZeros());
+      if (p.node_block() != (blocked ? B : 0))
+        std::printf("  B = %d, holes %d: node_block() %d, padding %.3f\n", B, holes, p.node_block(), double(blocks) * B * B / double(K.nonZeros()));
+      CHECK(p.node_block() == (blocked ? B : 0));
+      const nvib::LinearProduct::RowMatrix Kr = K;
+      const double alpha = p.rayleigh_alpha(), beta = p.rayleigh_beta();
+      const Vector am = alpha * m;
+      Vector ref(n);
+      for (Index i = 0; i < n; ++i) {
+        double s = out0[i];
+        for (nvib::LinearProduct::RowMatrix::InnerIterator it(Kr, i); it; ++it) s += it.value() * (u[it.col()] + beta * v[it.col()]);
+        ref[i] = s + am[i] * v[i];
+      }
+      Vector out = out0;
+      p.add(u.data(), v.data(), out.data());
+      CHECK(bitwise_equal(out, ref));
+      Vector formed = out0, scratch(n);
+      p.add(u.data(), v.data(), formed.data(), scratch.data());
+      CHECK(bitwise_equal(formed, ref));
+      Vector pieces = out0;
+      for (Index r0 = 0; r0 < n; r0 += 37) p.add(u.data(), v.data(), pieces.data(), r0, std::min(n, r0 + 37));
+      CHECK(bitwise_equal(pieces, ref));
+      cases += blocked;
+    }
+  std::printf("LinearProduct node blocks: %d blocked cases, bit for bit with the rows' rayleigh sums\n", cases);
+  CHECK(cases >= 2);
+}
+
 }  // namespace
 
 int main() {
   linear_product_cases();
   linear_product_reordered_cases();
+  linear_product_node_blocks();
   using LS = nvib::LinearSolverChoice;
   using Mode = nvib::NewtonMode;
   const Index n = 120;

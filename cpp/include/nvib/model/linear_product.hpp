@@ -11,6 +11,8 @@
 //             engineer assembles it, or mass- or stiffness-proportional damping): by rows,
 //             K (u + beta v) + alpha m v. The product reads K's indices and values once where the
 //             others read those of K and of C: half the memory traffic of a large model's step.
+//             Where K's DOFs come in nodes of 3 (or 2) consecutive DOFs whose blocks K stores nearly
+//             full (a 3-D solid's mesh), K is held by node blocks instead (node_block()).
 //   shared    K and C stored on one pattern (a consistent mass's Rayleigh damping, any C assembled on
 //             K's pattern): by rows, each column's K and C terms together, the indices read once.
 //   rows      any pattern: the compressed rows of K, then those of C.
@@ -67,6 +69,13 @@ class LinearProduct {
       kernel_ = &add_rayleigh;
       form_ = Form::rayleigh;
       C_ = RowMatrix();  // C = alpha M + beta K: K and alpha m hold it
+      if (node_blocks<3>()) {
+        kernel_ = &add_rayleigh_blocks<3>;
+        K_ = RowMatrix();  // the blocks hold every entry
+      } else if (node_blocks<2>()) {
+        kernel_ = &add_rayleigh_blocks<2>;
+        K_ = RowMatrix();
+      }
     } else if (same_pattern(K_, C_)) {
       kernel_ = &add_shared;
       form_ = Form::shared;
@@ -83,9 +92,14 @@ class LinearProduct {
   // column's entries (a 3-D solid's column has about 80), then takes the rows on it: one gather and one
   // multiply-add an entry instead of two gathers and two of each. The same bits as add().
   void add(const double* u, const double* v, double* out, double* scratch) const {
-    if (uses_scratch() && scratch != nullptr)
-      add_rayleigh_formed(*this, u, v, out, scratch);
-    else
+    if (uses_scratch() && scratch != nullptr) {
+      if (block_ == 3)
+        add_rayleigh_blocks_formed<3>(*this, u, v, out, scratch);
+      else if (block_ == 2)
+        add_rayleigh_blocks_formed<2>(*this, u, v, out, scratch);
+      else
+        add_rayleigh_formed(*this, u, v, out, scratch);
+    } else
       kernel_(*this, u, v, out, 0, n_);
   }
   // add() with a scratch uses it (its size: n).
@@ -121,6 +135,19 @@ class LinearProduct {
   double rayleigh_beta() const { return beta_; }
   // How far from its row a row's entries lie: max |i - j| over the stored entries of K and C.
   Index reach() const { return reach_; }
+  // The rayleigh form's node blocks: B = 3 or 2 where K is held by B x B blocks, else 0.
+  //   DOFs B k .. B k + B - 1 form node k (n a multiple of B); K is stored by the blocks of two nodes
+  //   that hold some entry, each block row's blocks by column, a block's B^2 values row by row, and a
+  //   position K does not store held as -0.0. A block row reads its blocks' values with no index of
+  //   their own and each block's B entries of u + beta v once: 1 + B + B^2 loads for B^2 entries where
+  //   the rows make 3 an entry. Measured on the 8-node brick meshes of benchmarks/fe_models.py (3 DOFs a
+  //   node, blocks 1.14 times K's entries): the product 1.36 times as fast as the rows.
+  //   Each row adds the same terms in the same order as the rows (columns ascending); a held -0.0 adds
+  //   -0.0 x, which leaves a sum as it was, except that an exact -0 sum becomes +0 where x < 0: the same
+  //   values, the sign of a zero aside. Taken where the blocks hold at most kMaxPadding times K's
+  //   entries (2-D quadrilateral walls, 1.38, keep the rows).
+  int node_block() const { return block_; }
+  static constexpr double kMaxPadding = 1.25;
 
  private:
   using Kernel = void (*)(const LinearProduct&, const double*, const double*, double*, Index, Index);
@@ -374,6 +401,87 @@ class LinearProduct {
     by_rows(
         ko, out, 0, n, [=](int q) { return kv[q] * wc[ki[q]]; }, [=](Index i, double s) { return s + am[i] * v[i]; });
   }
+  // K by node blocks of B DOFs (node_block()), if n is a multiple of B and the blocks hold at most
+  // kMaxPadding times K's stored entries; K's rows must hold their columns ascending (compressed).
+  template <int B>
+  bool node_blocks() {
+    if (n_ % B != 0 || K_.nonZeros() == 0) return false;
+    const Index nb = n_ / B;
+    const int *ko = K_.outerIndexPtr(), *ki = K_.innerIndexPtr();
+    const double* kv = K_.valuePtr();
+    const double limit = kMaxPadding * static_cast<double>(K_.nonZeros());
+    std::vector<int> bo(static_cast<std::size_t>(nb) + 1, 0), bi, where(static_cast<std::size_t>(nb), -1);
+    for (Index I = 0; I < nb; ++I) {
+      const std::size_t start = bi.size();
+      for (Index i = B * I; i < B * I + B; ++i)
+        for (int q = ko[i]; q < ko[i + 1]; ++q) {
+          const int J = ki[q] / B;
+          if (where[static_cast<std::size_t>(J)] != static_cast<int>(I)) where[static_cast<std::size_t>(J)] = static_cast<int>(I), bi.push_back(J);
+        }
+      std::sort(bi.begin() + static_cast<std::ptrdiff_t>(start), bi.end());
+      if (static_cast<double>(bi.size()) * B * B > limit || bi.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()) / (B * B))
+        return false;
+      bo[static_cast<std::size_t>(I) + 1] = static_cast<int>(bi.size());
+    }
+    std::vector<double> bv(bi.size() * B * B, -0.0);
+    for (Index I = 0; I < nb; ++I) {
+      for (int q = bo[static_cast<std::size_t>(I)]; q < bo[static_cast<std::size_t>(I) + 1]; ++q) where[static_cast<std::size_t>(bi[static_cast<std::size_t>(q)])] = q;
+      for (Index i = B * I; i < B * I + B; ++i)
+        for (int q = ko[i]; q < ko[i + 1]; ++q) {
+          const int J = ki[q] / B, c = ki[q] - B * J, r = static_cast<int>(i - B * I);
+          bv[static_cast<std::size_t>(where[static_cast<std::size_t>(J)]) * B * B + static_cast<std::size_t>(r * B + c)] = kv[q];
+        }
+    }
+    bo_ = std::move(bo);
+    bi_ = std::move(bi);
+    bv_ = std::move(bv);
+    block_ = B;
+    return true;
+  }
+  // add_rayleigh on node blocks, rows r0 .. r1 - 1 (any rows: each its block row's row r).
+  template <int B>
+  static void add_rayleigh_blocks(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
+                                  double* __restrict out, Index r0, Index r1) {
+    const int *__restrict bo = p.bo_.data(), *__restrict bi = p.bi_.data();
+    const double *__restrict bv = p.bv_.data(), *__restrict am = p.alpha_m_.data();
+    const double beta = p.beta_;
+    for (Index i = r0; i < r1; ++i) {
+      const Index I = i / B, r = i - B * I;
+      double s = out[i];
+      for (int q = bo[I], e = bo[I + 1]; q < e; ++q) {
+        const double* a = bv + static_cast<Index>(q) * (B * B) + r * B;
+        const Index j = static_cast<Index>(bi[q]) * B;
+        for (int c = 0; c < B; ++c) s += a[c] * (u[j + c] + beta * v[j + c]);
+      }
+      out[i] = s + am[i] * v[i];
+    }
+  }
+  // The same on every row, u + beta v formed once in w (as add_rayleigh_formed), a block row's B sums
+  // side by side.
+  template <int B>
+  static void add_rayleigh_blocks_formed(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
+                                         double* __restrict out, double* __restrict w) {
+    const Index n = p.n_, nb = n / B;
+    const double beta = p.beta_;
+    for (Index j = 0; j < n; ++j) w[j] = u[j] + beta * v[j];
+    const int *__restrict bo = p.bo_.data(), *__restrict bi = p.bi_.data();
+    const double *__restrict bv = p.bv_.data(), *__restrict am = p.alpha_m_.data();
+    const double* __restrict wc = w;
+    for (Index I = 0; I < nb; ++I) {
+      double* __restrict o = out + B * I;
+      double s[B];
+      for (int r = 0; r < B; ++r) s[r] = o[r];
+      for (int q = bo[I], e = bo[I + 1]; q < e; ++q) {
+        const double* a = bv + static_cast<Index>(q) * (B * B);
+        const double* x = wc + static_cast<Index>(bi[q]) * B;
+        for (int c = 0; c < B; ++c) {
+          const double xc = x[c];
+          for (int r = 0; r < B; ++r) s[r] += a[r * B + c] * xc;
+        }
+      }
+      for (int r = 0; r < B; ++r) o[r] = s[r] + am[B * I + r] * v[B * I + r];
+    }
+  }
   // K and C on one pattern: each position's two terms together (row by row: five loads an entry keep
   // the load ports busy; four rows side by side, as by_rows() takes them, measured 6-11 % slower).
   static void add_shared(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
@@ -413,6 +521,9 @@ class LinearProduct {
   Index const_lo_ = 0, const_hi_ = 0;  // constant_rows()
   double kc_[2 * kMaxBand + 1] = {}, cc_[2 * kMaxBand + 1] = {};
   Vector alpha_m_;  // alpha m (rayleigh)
+  int block_ = 0;                    // node_block()
+  std::vector<int> bo_, bi_;         // the blocks: block row I's are bo_[I] .. bo_[I + 1] - 1, of block columns bi_
+  std::vector<double> bv_;           // their values, B^2 a block, row by row
   double alpha_ = 0.0, beta_ = 0.0;
   Kernel kernel_ = &add_rows;
   Form form_ = Form::none;
