@@ -583,9 +583,9 @@ class Model:
 
     @property
     def linear_product_block(self) -> int:
-        """3 or 2 where the ``"rayleigh"`` product holds K by node blocks (nodes of that many consecutive
-        DOFs whose blocks K stores nearly full: a 3-D solid mesh), 0 otherwise. The same values as by
-        rows, with about half the loads per entry."""
+        """3 or 2 where the ``"rayleigh"`` or ``"shared"`` product holds K (and C) by node blocks (nodes of
+        that many consecutive DOFs whose blocks K stores nearly full: a 3-D solid mesh), 0 otherwise. The
+        same values as by rows, with about half the loads per entry."""
         return self._core.linear_product_block
 
     def evaluate_force(self, u, v, t: float = 0.0) -> np.ndarray:

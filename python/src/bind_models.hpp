@@ -424,7 +424,7 @@ inline void bind_models(py::module_& m) {
                              "(C on K's pattern), rows or none")
       .def_property_readonly("linear_product_block", [](const PyModel& p) {
         return p.visit([](auto& md) { return md.linear_product().node_block(); }); },
-                             "the rayleigh product's node blocks: 3 or 2 where K is held by blocks of that many DOFs, else 0")
+                             "the rayleigh or shared product's node blocks: 3 or 2 where K (and C) are held by blocks of that many DOFs, else 0")
       .def_property_readonly("has_state", [](const PyModel& p) { return p.visit([](auto& md) { return md.has_state(); }); },
                              "some law has memory (internal variables)")
       .def_property_readonly("state_size", [](const PyModel& p) { return p.visit([](auto& md) { return md.state_size(); }); })

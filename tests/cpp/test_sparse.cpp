@@ -323,10 +323,11 @@ SparseMatrix node_pattern(Index nodes, int B, int holes, std::mt19937& gen) {
   return A;
 }
 
-// The rayleigh form on node blocks (LinearProduct::node_block()): taken for nodes of 3 and 2 DOFs whose
-// blocks are nearly full, not where they are not; every way of taking it (whole, with a scratch, in
-// pieces of rows across the blocks) gives the bits of the rows' rayleigh sums: out0 + sum over K's
-// stored columns, ascending, of K_ij (u_j + beta v_j), then + alpha m_i v_i.
+// The rayleigh and shared forms on node blocks (LinearProduct::node_block()): taken for nodes of 3 and 2
+// DOFs whose blocks are nearly full, not where they are not; every way of taking them (whole, with a
+// scratch, in pieces of rows across the blocks) gives the bits of the rows' sums: out0 + sum over K's
+// stored columns, ascending, of K_ij (u_j + beta v_j), then + alpha m_i v_i (rayleigh), or of
+// K_ij u_j + C_ij v_j (shared).
 void linear_product_node_blocks() {
   std::mt19937 gen(2718);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -374,8 +375,34 @@ void linear_product_node_blocks() {
       for (Index r0 = 0; r0 < n; r0 += 37) p.add(u.data(), v.data(), pieces.data(), r0, std::min(n, r0 + 37));
       CHECK(bitwise_equal(pieces, ref));
       cases += blocked;
+      // the shared form (C on K's pattern, another mass): the rows' sums of K_ij u_j + C_ij v_j
+      SparseMatrix Cs = K;
+      for (Index j = 0; j < Cs.outerSize(); ++j)
+        for (SparseMatrix::InnerIterator it(Cs, j); it; ++it) it.valueRef() = normal(gen);
+      const nvib::LinearProduct ps(K, Cs, nullptr);
+      CHECK(ps.form() == nvib::LinearProduct::Form::shared);
+      CHECK(ps.node_block() == (blocked ? B : 0));
+      const nvib::LinearProduct::RowMatrix Csr = Cs;
+      Vector sref(n);
+      for (Index i = 0; i < n; ++i) {
+        double s = out0[i];
+        nvib::LinearProduct::RowMatrix::InnerIterator c(Csr, i);
+        for (nvib::LinearProduct::RowMatrix::InnerIterator k(Kr, i); k; ++k, ++c) s += k.value() * u[k.col()] + c.value() * v[c.col()];
+        sref[i] = s;
+      }
+      Vector sout = out0;
+      ps.add(u.data(), v.data(), sout.data());
+      CHECK(bitwise_equal(sout, sref));
+      Vector spieces = out0;
+      for (Index r0 = 0; r0 < n; r0 += 37) ps.add(u.data(), v.data(), spieces.data(), r0, std::min(n, r0 + 37));
+      CHECK(bitwise_equal(spieces, sref));
+      Vector sone = out0;  // a piece inside one block row, and one that ends inside the next
+      ps.add(u.data(), v.data(), sone.data(), 1, 2);
+      ps.add(u.data(), v.data(), sone.data(), 2, B + 1);
+      CHECK(bitwise_equal(sone.segment(1, B), sref.segment(1, B)));
+      CHECK(sone[0] == out0[0] && sone[B + 1] == out0[B + 1]);
     }
-  std::printf("LinearProduct node blocks: %d blocked cases, bit for bit with the rows' rayleigh sums\n", cases);
+  std::printf("LinearProduct node blocks: %d blocked cases, bit for bit with the rows' rayleigh and shared sums\n", cases);
   CHECK(cases >= 2);
 }
 

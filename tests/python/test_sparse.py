@@ -219,6 +219,7 @@ def test_rayleigh_damping_is_recognised_and_gives_the_products_to_round_off():
     assert lumped.linear_product == "rayleigh"
     assert lumped.linear_product_block == 3  # a brick mesh: K held by the 3 x 3 blocks of its nodes
     assert nvib.Model(M, K=K, C=(alpha * M + beta * K).tocsc()).linear_product == "shared"
+    assert nvib.Model(M, K=K, C=(alpha * M + beta * K).tocsc()).linear_product_block == 3
     off = C.copy()
     off[0, 0] *= 1 + 1e-9  # not of the form: the shared pattern
     assert nvib.Model(m, K=K, C=off).linear_product == "shared"

@@ -14,7 +14,8 @@
 //             Where K's DOFs come in nodes of 3 (or 2) consecutive DOFs whose blocks K stores nearly
 //             full (a 3-D solid's mesh), K is held by node blocks instead (node_block()).
 //   shared    K and C stored on one pattern (a consistent mass's Rayleigh damping, any C assembled on
-//             K's pattern): by rows, each column's K and C terms together, the indices read once.
+//             K's pattern): by rows, each column's K and C terms together, the indices read once; by
+//             node blocks where K's are nearly full, as the rayleigh form.
 //   rows      any pattern: the compressed rows of K, then those of C.
 // The band and the rows add each row's terms in the order of a product by columns (K's, then C's,
 // columns ascending): they agree bit for bit. The rayleigh and shared ways reorder the sums (and
@@ -79,6 +80,15 @@ class LinearProduct {
     } else if (same_pattern(K_, C_)) {
       kernel_ = &add_shared;
       form_ = Form::shared;
+      if (node_blocks<3>(true)) {
+        kernel_ = &add_shared_blocks<3>;
+        K_ = RowMatrix();  // the blocks hold every entry of both
+        C_ = RowMatrix();
+      } else if (node_blocks<2>(true)) {
+        kernel_ = &add_shared_blocks<2>;
+        K_ = RowMatrix();
+        C_ = RowMatrix();
+      }
     } else {
       kernel_ = &add_rows;
       form_ = Form::rows;
@@ -135,7 +145,8 @@ class LinearProduct {
   double rayleigh_beta() const { return beta_; }
   // How far from its row a row's entries lie: max |i - j| over the stored entries of K and C.
   Index reach() const { return reach_; }
-  // The rayleigh form's node blocks: B = 3 or 2 where K is held by B x B blocks, else 0.
+  // The rayleigh and shared forms' node blocks: B = 3 or 2 where K (and C) are held by B x B blocks,
+  // else 0.
   //   DOFs B k .. B k + B - 1 form node k (n a multiple of B); K is stored by the blocks of two nodes
   //   that hold some entry, each block row's blocks by column, a block's B^2 values row by row, and a
   //   position K does not store held as -0.0. A block row reads its blocks' values with no index of
@@ -403,8 +414,9 @@ class LinearProduct {
   }
   // K by node blocks of B DOFs (node_block()), if n is a multiple of B and the blocks hold at most
   // kMaxPadding times K's stored entries; K's rows must hold their columns ascending (compressed).
+  // with_c: C too, on the same blocks (the shared form: C on K's pattern).
   template <int B>
-  bool node_blocks() {
+  bool node_blocks(bool with_c = false) {
     if (n_ % B != 0 || K_.nonZeros() == 0) return false;
     const Index nb = n_ / B;
     const int *ko = K_.outerIndexPtr(), *ki = K_.innerIndexPtr();
@@ -423,18 +435,22 @@ class LinearProduct {
         return false;
       bo[static_cast<std::size_t>(I) + 1] = static_cast<int>(bi.size());
     }
-    std::vector<double> bv(bi.size() * B * B, -0.0);
+    std::vector<double> bv(bi.size() * B * B, -0.0), cbv(with_c ? bi.size() * B * B : 0, -0.0);
+    const double* cv = with_c ? C_.valuePtr() : nullptr;  // (on K's pattern: entry q of K is entry q of C)
     for (Index I = 0; I < nb; ++I) {
       for (int q = bo[static_cast<std::size_t>(I)]; q < bo[static_cast<std::size_t>(I) + 1]; ++q) where[static_cast<std::size_t>(bi[static_cast<std::size_t>(q)])] = q;
       for (Index i = B * I; i < B * I + B; ++i)
         for (int q = ko[i]; q < ko[i + 1]; ++q) {
           const int J = ki[q] / B, c = ki[q] - B * J, r = static_cast<int>(i - B * I);
-          bv[static_cast<std::size_t>(where[static_cast<std::size_t>(J)]) * B * B + static_cast<std::size_t>(r * B + c)] = kv[q];
+          const std::size_t at = static_cast<std::size_t>(where[static_cast<std::size_t>(J)]) * B * B + static_cast<std::size_t>(r * B + c);
+          bv[at] = kv[q];
+          if (with_c) cbv[at] = cv[q];
         }
     }
     bo_ = std::move(bo);
     bi_ = std::move(bi);
     bv_ = std::move(bv);
+    cbv_ = std::move(cbv);
     block_ = B;
     return true;
   }
@@ -482,6 +498,39 @@ class LinearProduct {
       for (int r = 0; r < B; ++r) o[r] = s[r] + am[B * I + r] * v[B * I + r];
     }
   }
+  // add_shared on node blocks (C's values on K's blocks): rows r0 .. r1 - 1, the whole block rows among
+  // them with their B sums side by side, each block's B entries of u and of v read once.
+  template <int B>
+  static void add_shared_blocks(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
+                                double* __restrict out, Index r0, Index r1) {
+    const int *__restrict bo = p.bo_.data(), *__restrict bi = p.bi_.data();
+    const double *__restrict kv = p.bv_.data(), *__restrict cv = p.cbv_.data();
+    auto row = [&](Index i) {  // row r of its block row
+      const Index I = i / B, r = i - B * I;
+      double s = out[i];
+      for (int q = bo[I], e = bo[I + 1]; q < e; ++q) {
+        const Index o = static_cast<Index>(q) * (B * B) + r * B, j = static_cast<Index>(bi[q]) * B;
+        for (int c = 0; c < B; ++c) s += kv[o + c] * u[j + c] + cv[o + c] * v[j + c];
+      }
+      out[i] = s;
+    };
+    const Index I0 = (r0 + B - 1) / B, I1 = std::max(I0, r1 / B);  // the whole block rows I0 .. I1 - 1
+    for (Index i = r0; i < std::min(r1, B * I0); ++i) row(i);
+    for (Index I = I0; I < I1; ++I) {
+      double s[B];
+      for (int r = 0; r < B; ++r) s[r] = out[B * I + r];
+      for (int q = bo[I], e = bo[I + 1]; q < e; ++q) {
+        const double *a = kv + static_cast<Index>(q) * (B * B), *g = cv + static_cast<Index>(q) * (B * B);
+        const Index j = static_cast<Index>(bi[q]) * B;
+        for (int c = 0; c < B; ++c) {
+          const double x = u[j + c], y = v[j + c];
+          for (int r = 0; r < B; ++r) s[r] += a[r * B + c] * x + g[r * B + c] * y;
+        }
+      }
+      for (int r = 0; r < B; ++r) out[B * I + r] = s[r];
+    }
+    for (Index i = std::max(B * I1, r0); i < r1; ++i) row(i);
+  }
   // K and C on one pattern: each position's two terms together (row by row: five loads an entry keep
   // the load ports busy; four rows side by side, as by_rows() takes them, measured 6-11 % slower).
   static void add_shared(const LinearProduct& p, const double* __restrict u, const double* __restrict v,
@@ -524,6 +573,7 @@ class LinearProduct {
   int block_ = 0;                    // node_block()
   std::vector<int> bo_, bi_;         // the blocks: block row I's are bo_[I] .. bo_[I + 1] - 1, of block columns bi_
   std::vector<double> bv_;           // their values, B^2 a block, row by row
+  std::vector<double> cbv_;          // C's on the same blocks (the shared form)
   double alpha_ = 0.0, beta_ = 0.0;
   Kernel kernel_ = &add_rows;
   Form form_ = Form::none;
