@@ -70,25 +70,18 @@ class LinearProduct {
       kernel_ = &add_rayleigh;
       form_ = Form::rayleigh;
       C_ = RowMatrix();  // C = alpha M + beta K: K and alpha m hold it
-      if (node_blocks<3>()) {
-        kernel_ = &add_rayleigh_blocks<3>;
-        K_ = RowMatrix();  // the blocks hold every entry
-      } else if (node_blocks<2>()) {
-        kernel_ = &add_rayleigh_blocks<2>;
-        K_ = RowMatrix();
-      }
+      formed_ = &add_rayleigh_formed;
+      if (node_blocks<3>(false))
+        kernel_ = &add_rayleigh_blocks<3>, formed_ = &add_rayleigh_blocks_formed<3>;
+      else if (node_blocks<2>(false))
+        kernel_ = &add_rayleigh_blocks<2>, formed_ = &add_rayleigh_blocks_formed<2>;
     } else if (same_pattern(K_, C_)) {
       kernel_ = &add_shared;
       form_ = Form::shared;
-      if (node_blocks<3>(true)) {
+      if (node_blocks<3>(true))
         kernel_ = &add_shared_blocks<3>;
-        K_ = RowMatrix();  // the blocks hold every entry of both
-        C_ = RowMatrix();
-      } else if (node_blocks<2>(true)) {
+      else if (node_blocks<2>(true))
         kernel_ = &add_shared_blocks<2>;
-        K_ = RowMatrix();
-        C_ = RowMatrix();
-      }
     } else {
       kernel_ = &add_rows;
       form_ = Form::rows;
@@ -102,18 +95,13 @@ class LinearProduct {
   // column's entries (a 3-D solid's column has about 80), then takes the rows on it: one gather and one
   // multiply-add an entry instead of two gathers and two of each. The same bits as add().
   void add(const double* u, const double* v, double* out, double* scratch) const {
-    if (uses_scratch() && scratch != nullptr) {
-      if (block_ == 3)
-        add_rayleigh_blocks_formed<3>(*this, u, v, out, scratch);
-      else if (block_ == 2)
-        add_rayleigh_blocks_formed<2>(*this, u, v, out, scratch);
-      else
-        add_rayleigh_formed(*this, u, v, out, scratch);
-    } else
+    if (uses_scratch() && scratch != nullptr)
+      formed_(*this, u, v, out, scratch);
+    else
       kernel_(*this, u, v, out, 0, n_);
   }
   // add() with a scratch uses it (its size: n).
-  bool uses_scratch() const { return form_ == Form::rayleigh; }
+  bool uses_scratch() const { return formed_ != nullptr; }
   // The same for rows r0 .. r1 - 1 only (they read u and v within reach() of the rows).
   void add(const double* u, const double* v, double* out, Index r0, Index r1) const { kernel_(*this, u, v, out, r0, r1); }
   // K and C holding fewer stored entries than this together keep the rows' sums (rayleigh and shared
@@ -162,6 +150,8 @@ class LinearProduct {
 
  private:
   using Kernel = void (*)(const LinearProduct&, const double*, const double*, double*, Index, Index);
+  // Every row with u + beta v formed in a scratch (the rayleigh form's add() with a scratch).
+  using Formed = void (*)(const LinearProduct&, const double*, const double*, double*, double*);
   static constexpr int kNone = -1;     // no matrix
   static constexpr int kGeneral = -2;  // not a complete band of half-width <= 2
   static constexpr int kMaxBand = 2;
@@ -414,9 +404,10 @@ class LinearProduct {
   }
   // K by node blocks of B DOFs (node_block()), if n is a multiple of B and the blocks hold at most
   // kMaxPadding times K's stored entries; K's rows must hold their columns ascending (compressed).
-  // with_c: C too, on the same blocks (the shared form: C on K's pattern).
+  // with_c: C too, on the same blocks (the shared form: C on K's pattern). Once blocked, the compressed
+  // rows are released: the blocks hold every entry.
   template <int B>
-  bool node_blocks(bool with_c = false) {
+  bool node_blocks(bool with_c) {
     if (n_ % B != 0 || K_.nonZeros() == 0) return false;
     const Index nb = n_ / B;
     const int *ko = K_.outerIndexPtr(), *ki = K_.innerIndexPtr();
@@ -452,6 +443,8 @@ class LinearProduct {
     bv_ = std::move(bv);
     cbv_ = std::move(cbv);
     block_ = B;
+    K_ = RowMatrix();
+    C_ = RowMatrix();
     return true;
   }
   // add_rayleigh on node blocks, rows r0 .. r1 - 1 (any rows: each its block row's row r).
@@ -576,6 +569,7 @@ class LinearProduct {
   std::vector<double> cbv_;          // C's on the same blocks (the shared form)
   double alpha_ = 0.0, beta_ = 0.0;
   Kernel kernel_ = &add_rows;
+  Formed formed_ = nullptr;  // the rayleigh form's (uses_scratch())
   Form form_ = Form::none;
 };
 

@@ -219,20 +219,26 @@ class ErrorEstimate {
       age_ += span;
     }
   }
-  // jerk, level and peak of every DOF at a sample: now(k) the differentiated acceleration at this
-  // step, before(k) at the step before.
-  template <class Stepper, class Now, class Before>
-  void sample(const Stepper& st, Now now, Before before) {
+  // jerk, level and peak of every DOF at a sample, in one pass: now(k) the differentiated acceleration
+  // at this step, before(k) at the step before; then keep(k, now(k)) (what the next sample reads).
+  template <class Stepper, class Now, class Before, class Keep>
+  void sample(const Stepper& st, Now now, Before before, Keep keep) {
     const double tau = age_;
-    const double* u = st.u().data();
-    double *j = jerk_.data(), *l = level_.data(), *pk = peak_.data();
-    const bool level = c_.c2 > 0.0;
-    for (Index k = 0, n = jerk_.size(); k < n; ++k) {
-      const double x = now(k);
-      j[k] = std::max(j[k], tau * std::abs(x - before(k)));
-      if (level) l[k] = std::max(l[k], tau * std::abs(x));
-      pk[k] = std::max(pk[k], std::abs(u[k]));
-    }
+    const double* __restrict u = st.u().data();
+    double *__restrict j = jerk_.data(), *__restrict l = level_.data(), *__restrict pk = peak_.data();
+    auto pass = [&](auto with_level) {
+      detail::for_each_index(jerk_.size(), [&](Index k) {  // (unrolled up to 8 DOFs)
+        const double x = now(k);
+        j[k] = std::max(j[k], tau * std::abs(x - before(k)));
+        if constexpr (decltype(with_level)::value) l[k] = std::max(l[k], tau * std::abs(x));
+        pk[k] = std::max(pk[k], std::abs(u[k]));
+        keep(k, x);
+      });
+    };
+    if (c_.c2 > 0.0)
+      pass(std::true_type{});
+    else
+      pass(std::false_type{});
   }
   template <class Stepper>
   void step(const Stepper& st, std::int64_t i) {
@@ -249,32 +255,21 @@ class ErrorEstimate {
       } else if (phase == 0) {
         age_to(st, i);
         const double* before = kept != nullptr ? kept : p;
-        sample(st, [a](Index k) { return a[k]; }, [before](Index k) { return before[k]; });
+        sample(st, [a](Index k) { return a[k]; }, [before](Index k) { return before[k]; }, [](Index, double) {});
       }
       return;
     }
     age_to(st, i);
-    // Every step, in one pass: the sample of the alpha-point acceleration x against the one of the
-    // step before (b), then x kept in b and a_n in p for the next step.
-    const double w = w_, tau = age_;
-    const double* __restrict an = a;
-    const double* __restrict u = st.u().data();
-    double *__restrict b = blended_.data(), *__restrict pp = p, *__restrict j = jerk_.data(),
-                       *__restrict l = level_.data(), *__restrict pk = peak_.data();
-    auto pass = [&](auto with_level) {
-      detail::for_each_index(n, [&](Index k) {
-        const double x = (1.0 - w) * an[k] + w * pp[k];
-        j[k] = std::max(j[k], tau * std::abs(x - b[k]));
-        if constexpr (decltype(with_level)::value) l[k] = std::max(l[k], tau * std::abs(x));
-        pk[k] = std::max(pk[k], std::abs(u[k]));
-        b[k] = x;
-        pp[k] = an[k];
-      });
-    };
-    if (c_.c2 > 0.0)
-      pass(std::true_type{});
-    else
-      pass(std::false_type{});
+    // Every step: the alpha-point acceleration x sampled against the one of the step before (b), then
+    // x kept in b and a_n in p for the next step.
+    double* b = blended_.data();
+    const double w = w_;
+    sample(
+        st, [a, p, w](Index k) { return (1.0 - w) * a[k] + w * p[k]; }, [b](Index k) { return b[k]; },
+        [a, p, b](Index k, double x) {
+          b[k] = x;
+          p[k] = a[k];
+        });
   }
   // a_{n-1} from a stepper that keeps it (previous_a(), null where it does not at this step), else null.
   template <class Stepper>
